@@ -1,0 +1,45 @@
+# `make test` and `make run` install what is missing (Debian packages with apt-get, Python packages
+# in .venv) and then run. Safe to repeat: each step is skipped when its result is already there.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+# engines + a one-node SLURM for the cluster tests; binaries checked by name, installed if absent
+DEBS := liggghts yade munge slurmctld slurmd slurm-client
+BINS := liggghts yade munged slurmctld slurmd sbatch
+
+.PHONY: all deps debs venv test run bench clean
+
+all: test
+
+debs:
+	@missing=""; for b in $(BINS); do command -v $$b >/dev/null || missing="$$missing $$b"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages (missing:$$missing)"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(DEBS) python3-venv; \
+	fi
+
+$(VENV)/.installed: pyproject.toml
+	@$(PYTHON) -m venv $(VENV) 2>/dev/null || { DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq python3-venv && $(PYTHON) -m venv $(VENV); }
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[test]'
+	touch $@
+
+venv: $(VENV)/.installed
+
+deps: debs venv
+
+test: deps
+	$(PY) -m pytest -q
+
+run: deps
+	$(VENV)/bin/campaign run campaigns/quick.toml
+	$(VENV)/bin/campaign report campaigns/quick.toml
+
+bench: deps
+	$(PY) bench/run_all.py
+
+clean:
+	rm -rf $(VENV) runs .pytest_cache

@@ -1,0 +1,1 @@
+"""Campaigns: TOML schema, plan (cases and ids), store (folders + index), executors, runner."""

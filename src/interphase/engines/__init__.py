@@ -1,0 +1,1 @@
+"""DEM engines behind one contract (interphase.engines.base); imports no campaign code."""

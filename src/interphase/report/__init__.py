@@ -1,0 +1,1 @@
+"""Paper tables and figures from a campaign's index and case folders."""

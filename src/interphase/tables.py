@@ -1,0 +1,40 @@
+"""Column contracts of the two tables every engine reader produces and every analysis consumes.
+
+ContactTable: one row per contact per snapshot, in the analysis frame of METHODS.md §0 (x = shear
+axis with the soil moving +x relative to the surface, z up into the soil). Units: m, N, s.
+  n = unit normal from body 1 to body 2 (wall/surface contact: from the contact point into the
+  particle, body 2 is the particle); force columns are the force ON body 2;
+  fn = f·n (positive in compression), ft = f·t with t = (−nz, nx).
+  kind: 'pp' particle–particle, 'ps' particle–rough surface, 'pw' particle–other wall.
+  For wall contacts id1 = -1 - (wall index) and (x1, z1) = the contact point.
+History: one row per output step. surface_fx/surface_fz: force ON the surface (box test: on the
+upper half across the shear plane) [N]; normal_force: platen force [N]; platen_z [m].
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+CONTACT_COLUMNS = (
+    "snapshot", "time", "shear_disp", "kind", "id1", "id2",
+    "cx", "cz", "nx", "nz", "fn", "ft", "fx", "fz",
+    "x1", "z1", "x2", "z2", "overlap",
+)
+HISTORY_COLUMNS = (
+    "time", "shear_disp", "surface_fx", "surface_fz", "normal_force", "platen_z", "n_contacts",
+)
+CONTACT_KINDS = ("pp", "ps", "pw")
+
+
+class MissingColumnError(ValueError):
+    """A table lacks a column of its contract; the message names it."""
+
+
+def require_columns(df: pd.DataFrame, columns, what: str = "ContactTable") -> None:
+    """Refuse a table missing any of `columns`, naming the first missing ones."""
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise MissingColumnError(
+            f"{what} is missing column(s) {', '.join(missing)}; "
+            f"expected {', '.join(columns)}"
+        )
