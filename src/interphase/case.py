@@ -1,0 +1,140 @@
+"""The engine-free Case: every physical input of one simulation, SI units, frozen and hashable.
+
+A Case knows nothing of LIGGGHTS or YADE. Its identity (`case_id`) is the short hash of its
+canonical JSON plus the engine's name, version and template hash: floats canonicalised by
+repr of the round-tripped value, keys sorted (signac style).
+
+Geometry: the soil box is `box_length_d50` × `box_height_d50` (D50 units) in the x–z plane, quasi-2D
+(one grain layer in y). For `test = "interface"` the rough surface (profile) slides in x beneath
+the soil held in the box; for `test = "box"` a direct shear box of two halves is sheared on the
+mid-height plane (no profile).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+
+from interphase.errors import InputError
+from interphase.material import Gradation
+from interphase.surface.spec import ProfileSpec
+
+TESTS = ("interface", "box")
+
+
+@dataclass(frozen=True)
+class Case:
+    test: str = "interface"                 # "interface" | "box"
+    profile: ProfileSpec | None = None      # required for interface tests, None for box tests
+    d50: float = 0.7e-3                     # median diameter [m]
+    gradation: Gradation = field(default_factory=Gradation)
+    friction_pp: float = 0.5                # particle–particle sliding friction [-]
+    friction_ps: float = 0.2                # particle–surface [-] (tan φμ)
+    friction_pw: float = 0.9                # particle–boundary: box walls, platen [-]
+    rolling_friction: float = 0.1           # rolling-friction coefficient, all contacts [-]
+    density: float = 2650.0                 # [kg/m³]
+    shear_modulus: float = 29e9             # [Pa] (study: 29 GPa; campaigns may soften it, see docs)
+    poisson: float = 0.3                    # [-]
+    restitution: float = 0.1                # normal coefficient of restitution [-]
+    normal_stress: float = 100e3            # [Pa], compression positive
+    shear_velocity: float = 0.05            # [m/s]
+    shear_distance: float = 3e-3            # [m]
+    snapshot_every: float = 0.25e-3         # shear displacement between contact dumps [m]
+    box_length_d50: float = 40.0            # soil box length [D50]
+    box_height_d50: float = 20.0            # soil height above the surface [D50]
+    n_grains: int | None = None             # None: fill the box to box_height_d50
+    seed: int = 1                           # packing seed
+    name: str = field(default="", compare=False)  # a label for people; not part of the identity
+
+    def __post_init__(self):
+        def bad(fld, msg, fix=None):
+            raise InputError(msg, where=f"case.{fld}", fix=fix)
+
+        if self.test not in TESTS:
+            bad("test", f"unknown test {self.test!r}", f"use one of {', '.join(TESTS)}")
+        if self.test == "interface" and self.profile is None:
+            bad("profile", "an interface test needs a surface profile", "give profile = {kind = 'flat'} or another")
+        if self.test == "box" and self.profile is not None:
+            bad("profile", "a direct shear box test takes no surface profile", "remove the profile")
+        if not isinstance(self.gradation, Gradation):
+            bad("gradation", "gradation must be a Gradation")
+        positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
+                    "snapshot_every", "box_length_d50", "box_height_d50")
+        nonneg = ("friction_pp", "friction_ps", "friction_pw", "rolling_friction")
+        for f in positive + nonneg + ("poisson", "restitution"):
+            v = getattr(self, f)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                bad(f, f"must be a finite number, got {v!r}")
+        for f in positive:
+            if getattr(self, f) <= 0:
+                bad(f, f"must be > 0, got {getattr(self, f)!r}")
+        for f in nonneg:
+            if getattr(self, f) < 0:
+                bad(f, f"must be ≥ 0, got {getattr(self, f)!r}")
+        if not 0 <= self.poisson < 0.5:
+            bad("poisson", f"must be in [0, 0.5), got {self.poisson!r}")
+        if not 0 < self.restitution <= 1:
+            bad("restitution", f"must be in (0, 1], got {self.restitution!r}")
+        if self.d50 > 0.1:
+            bad("d50", f"{self.d50!r} m is more than 10 cm", "d50 is in metres (0.7 mm = 0.0007)")
+        if self.n_grains is not None and (isinstance(self.n_grains, bool) or not isinstance(self.n_grains, int)
+                                          or self.n_grains < 2):
+            bad("n_grains", f"must be an integer ≥ 2 or omitted, got {self.n_grains!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
+            bad("seed", f"must be an integer, got {self.seed!r}")
+        if self.snapshot_every > self.shear_distance:
+            bad("snapshot_every", "is longer than shear_distance: no contact snapshot would be written",
+                "make snapshot_every ≤ shear_distance")
+        if self.d50 < self.gradation.d_min or self.d50 > self.gradation.d_max:
+            bad("d50", f"{self.d50!r} m lies outside the gradation {self.gradation.d_min}–{self.gradation.d_max} m")
+
+    # ---- derived ---------------------------------------------------------------------------
+    @property
+    def box_length(self) -> float:
+        """Soil box length [m]."""
+        return self.box_length_d50 * self.d50
+
+    @property
+    def box_height(self) -> float:
+        """Soil height [m]."""
+        return self.box_height_d50 * self.d50
+
+    # ---- identity --------------------------------------------------------------------------
+    def canonical(self) -> dict:
+        """Physical inputs as plain JSON data (no label), floats as round-trip values."""
+        out = {}
+        for f in dataclasses.fields(self):
+            if not f.compare:
+                continue
+            v = getattr(self, f.name)
+            if isinstance(v, (ProfileSpec, Gradation)):
+                v = v.canonical()
+            elif isinstance(v, float):
+                v = float(repr(v))
+            out[f.name] = v
+        return out
+
+    def label(self) -> str:
+        if self.name:
+            return self.name
+        surface = self.profile.label() if self.profile else "box"
+        grading = "user" if self.gradation.sizes else self.gradation.name
+        return f"{self.test}-{surface}-mu{self.friction_ps:g}-{grading}-s{self.seed}"
+
+    def replace(self, **changes) -> "Case":
+        return dataclasses.replace(self, **changes)
+
+
+def canonical_json(obj) -> str:
+    """Sorted keys, no whitespace, floats by repr: the same bytes on every machine."""
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
+
+
+def case_id(case: Case, engine: str, engine_version: str, template_hash: str, length: int = 12) -> str:
+    """Short hash of the case's canonical inputs plus the engine that runs it."""
+    payload = canonical_json({"case": case.canonical(), "engine": engine,
+                              "engine_version": engine_version, "template": template_hash})
+    return hashlib.sha256(payload.encode()).hexdigest()[:length]
