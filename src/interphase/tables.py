@@ -7,6 +7,8 @@ axis with the soil moving +x relative to the surface, z up into the soil). Units
   fn = f·n (positive in compression), ft = f·t with t = (−nz, nx).
   kind: 'pp' particle–particle, 'ps' particle–rough surface, 'pw' particle–other wall.
   For wall contacts id1 = -1 - (wall index) and (x1, z1) = the contact point.
+Particles: one row per grain per snapshot (same snapshots as contacts): centre x, z [m], velocity
+vx, vz [m/s] in the analysis frame, radius [m]; for velocity profiles, shear bands, inertial number.
 History: one row per output step. surface_fx/surface_fz: force ON the surface (box test: on the
 upper half across the shear plane) [N]; normal_force: platen force [N]; platen_z [m].
 """
@@ -23,6 +25,7 @@ CONTACT_COLUMNS = (
 HISTORY_COLUMNS = (
     "time", "shear_disp", "surface_fx", "surface_fz", "normal_force", "platen_z", "n_contacts",
 )
+PARTICLE_COLUMNS = ("snapshot", "time", "shear_disp", "id", "x", "z", "vx", "vz", "radius")
 CONTACT_KINDS = ("pp", "ps", "pw")
 
 

@@ -51,6 +51,7 @@ class EngineError(RuntimeError):
 class Results:
     contacts: pd.DataFrame   # interphase.tables.CONTACT_COLUMNS
     history: pd.DataFrame    # interphase.tables.HISTORY_COLUMNS
+    particles: pd.DataFrame | None = None  # interphase.tables.PARTICLE_COLUMNS
 
 
 @dataclass(frozen=True)
