@@ -33,6 +33,11 @@ def _add_campaign(sub) -> None:
     pass
 
 
+# ---- engine cross-check: crosscheck -----------------------------------------------------------
+def _add_crosscheck(sub) -> None:
+    pass
+
+
 # ---- results: report, predict ------------------------------------------------------------------
 def _add_report(sub) -> None:
     pass
@@ -48,6 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_surface(sub)
     _add_engine(sub)
     _add_campaign(sub)
+    _add_crosscheck(sub)
     _add_report(sub)
     return parser
 
