@@ -138,3 +138,84 @@ def case_id(case: Case, engine: str, engine_version: str, template_hash: str, le
     payload = canonical_json({"case": case.canonical(), "engine": engine,
                               "engine_version": engine_version, "template": template_hash})
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
+
+
+def _did_you_mean(key: str, allowed) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(key, list(allowed), n=1)
+    return f"did you mean {close[0]!r}?" if close else f"allowed keys: {', '.join(sorted(allowed))}"
+
+
+def case_from_dict(data: dict, where: str = "case", base_dir=None) -> Case:
+    try:
+        return _case_from_dict(data, where, base_dir)
+    except InputError as exc:
+        if str(exc).startswith(where):
+            raise
+        # anchor the message at the caller's location (file/table), keeping field and fix
+        raise InputError(str(exc), where=where) from None
+
+
+def _case_from_dict(data: dict, where: str, base_dir) -> Case:
+    """Build a Case from plain data (a TOML table), SI units, field names as in Case.
+
+    `profile` is a table: {kind = "sawtooth", rt = 1, sw = 2, sr = 0} (D50 units), or
+    {kind = "file", path = "x.csv", units = "um", cutoff = 0.0008}; a relative path is taken from
+    `base_dir` (the campaign file's folder). `gradation` is "mono" | "poly" or
+    {sizes = [m...], fractions = [...]}. Unknown keys are refused with a did-you-mean.
+    `where` prefixes every message (e.g. "group1.toml: [case]").
+    """
+    from pathlib import Path
+
+    fields = {f.name: f for f in dataclasses.fields(Case)}
+    kwargs = {}
+    for key, value in data.items():
+        if key not in fields:
+            raise InputError(f"unknown key {key!r}", where=where, fix=_did_you_mean(key, fields))
+        kwargs[key] = value
+    prof = kwargs.get("profile")
+    if prof is not None:
+        if isinstance(prof, str):
+            prof = {"kind": "file", "path": prof} if prof not in ("flat",) else {"kind": "flat"}
+        if not isinstance(prof, dict) or "kind" not in prof:
+            raise InputError("profile must be a table with a 'kind'", where=f"{where}.profile",
+                             fix="e.g. profile = {kind = \"sawtooth\", rt = 1, sw = 2, sr = 0}")
+        prof = dict(prof)
+        kind = prof.pop("kind")
+        if kind == "file":
+            allowed = {"path", "units", "cutoff"}
+            for k in prof:
+                if k not in allowed:
+                    raise InputError(f"unknown key {k!r} in a file profile", where=f"{where}.profile",
+                                     fix=_did_you_mean(k, allowed))
+            if "path" not in prof:
+                raise InputError("a file profile needs a path", where=f"{where}.profile.path")
+            path = Path(prof["path"])
+            if base_dir is not None and not path.is_absolute():
+                path = Path(base_dir) / path
+            kwargs["profile"] = ProfileSpec.from_file(path, units=prof.get("units", "m"),
+                                                      cutoff=prof.get("cutoff"), where=f"{where}.profile")
+        else:
+            kwargs["profile"] = ProfileSpec.make(kind, where=f"{where}.profile", **prof)
+    grad = kwargs.get("gradation")
+    if grad is not None:
+        if isinstance(grad, str):
+            kwargs["gradation"] = Gradation(name=grad)
+        elif isinstance(grad, dict):
+            extra = set(grad) - {"sizes", "fractions"}
+            if extra:
+                raise InputError(f"unknown key {sorted(extra)[0]!r} in gradation", where=f"{where}.gradation",
+                                 fix="a user gradation has sizes = [m, ...] and fractions = [...]")
+            kwargs["gradation"] = Gradation(name="user", sizes=tuple(float(s) for s in grad.get("sizes", ())),
+                                            fractions=tuple(float(f) for f in grad.get("fractions", ())))
+        else:
+            raise InputError(f"gradation must be 'mono', 'poly' or a table, got {grad!r}", where=f"{where}.gradation")
+    # ints given where floats are expected are fine; floats where ints are expected are not
+    for key in ("n_grains", "seed"):
+        if isinstance(kwargs.get(key), float) and float(kwargs[key]).is_integer():
+            kwargs[key] = int(kwargs[key])
+    for key, value in kwargs.items():
+        if isinstance(value, int) and not isinstance(value, bool) and fields[key].type in ("float", float):
+            kwargs[key] = float(value)
+    return Case(**kwargs)
