@@ -1,0 +1,157 @@
+"""Surface profiles z(x): the study's generated groups and the dispatch from a ProfileSpec.
+
+A Profile is a polyline in metres. Generated profiles (METHODS.md §1) take sizes in D50 units and
+return their exact corner vertices, so nothing is lost before the centroid trace resamples them.
+Periodic convention: a periodic profile stores one closing vertex, z[-1] == z[0], and its period is
+x[-1] − x[0]; z(x + period) = z(x).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from interphase.errors import InputError
+from interphase.surface.spec import UNITS, ProfileSpec
+
+
+@dataclass(frozen=True, eq=False)
+class Profile:
+    x: np.ndarray          # [m], strictly increasing
+    z: np.ndarray          # [m], up into the soil
+    periodic: bool = False
+    name: str = ""
+
+    def __post_init__(self):
+        x = np.asarray(self.x, dtype=float)
+        z = np.asarray(self.z, dtype=float)
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "z", z)
+        if x.ndim != 1 or x.shape != z.shape or x.size < 2:
+            raise InputError("a profile needs at least two (x, z) points of equal count", where=self.name or "profile")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+            raise InputError("profile contains NaN or infinite values", where=self.name or "profile")
+        if np.any(np.diff(x) <= 0):
+            raise InputError("profile x must increase strictly", where=self.name or "profile")
+
+    @property
+    def length(self) -> float:
+        """Horizontal extent [m] (the period for a periodic profile)."""
+        return float(self.x[-1] - self.x[0])
+
+    def scaled(self, factor: float) -> "Profile":
+        return Profile(self.x * factor, self.z * factor, self.periodic, self.name)
+
+    def mirrored(self) -> "Profile":
+        """x → −x (then re-sorted): the same surface sheared the other way (shear_sign flipped)."""
+        return Profile(-self.x[::-1], self.z[::-1], self.periodic, self.name)
+
+
+def flat(length: float, name: str = "flat") -> Profile:
+    """A flat surface of `length` m at z = 0 (periodic: any period)."""
+    return Profile(np.array([0.0, length]), np.zeros(2), periodic=True, name=name)
+
+
+def sawtooth(rt: float, sw: float, sr: float = 0.0, *, d50: float, length: float | None = None,
+             periods: int | None = None, name: str | None = None) -> Profile:
+    """Groups 1–3: symmetric triangles of height `rt`, base `sw`, flat `sr` between them (D50 units).
+
+    Valleys at z = 0; one period is rise (sw/2), fall (sw/2), flat (sr). The profile holds a whole
+    number of periods covering at least `length` m (or exactly `periods`). Slope α = atan(2·rt/sw).
+    """
+    if rt <= 0 or sw <= 0 or sr < 0:
+        raise InputError(f"need rt > 0, sw > 0, sr ≥ 0 (D50 units), got rt={rt}, sw={sw}, sr={sr}", where="sawtooth")
+    lam = (sw + sr) * d50
+    if periods is None:
+        if length is None:
+            raise InputError("give length or periods", where="sawtooth")
+        periods = max(1, math.ceil(length / lam - 1e-9))
+    one_x = np.array([0.0, sw / 2, sw] + ([sw + sr] if sr > 0 else [])) * d50
+    one_z = np.array([0.0, rt, 0.0] + ([0.0] if sr > 0 else [])) * d50
+    k = np.arange(periods)[:, None] * lam
+    x = np.concatenate([(one_x[:-1] + k).ravel(), [periods * lam]])
+    z = np.concatenate([np.tile(one_z[:-1], periods), [0.0]])
+    return Profile(x, z, periodic=True, name=name or f"sawtooth-rt{rt:g}-sw{sw:g}-sr{sr:g}")
+
+
+def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: float, seed: int,
+                   name: str | None = None) -> Profile:
+    """Group 4: a random walk of straight segments (sizes in D50 units), a pure function of its args.
+
+    Project's law (METHODS.md §1 leaves it open):
+      - segment i has horizontal projection au·m_i and vertical projection ar·au·k_i, with the
+        multipliers m_i, k_i drawn independently from Uniform(0.5, 1.5) (mean 1: au and ar stay the
+        mean projections);
+      - sign rule: each segment goes up or down with probability ½ (numpy PCG64 seeded by `seed`);
+      - bound rule: the running height stays in [0, rtmax]: a step that would leave the band is
+        reflected (its sign flipped); if the reflected step also leaves it, the step is clipped to the
+        bound it crosses. The walk starts at rtmax/2.
+    """
+    if au <= 0 or ar <= 0 or rtmax <= 0:
+        raise InputError(f"need au, ar, rtmax > 0 (D50 units), got {au}, {ar}, {rtmax}", where="random profile")
+    rng = np.random.default_rng(int(seed))
+    n = max(2, math.ceil(length / (au * d50 * 0.5)) + 1)   # enough segments even if all multipliers are 0.5
+    m = rng.uniform(0.5, 1.5, n)
+    k = rng.uniform(0.5, 1.5, n)
+    sign = np.where(rng.random(n) < 0.5, -1.0, 1.0)
+    dz = ar * au * k * sign
+    # the bound rule is sequential (each step depends on the height so far); n is a few hundred
+    z = np.empty(n + 1)
+    z[0] = rtmax / 2
+    for i in range(n):
+        step = dz[i]
+        if not 0.0 <= z[i] + step <= rtmax:
+            step = -step
+        z[i + 1] = min(max(z[i] + step, 0.0), rtmax)
+    x = np.concatenate([[0.0], np.cumsum(au * m)])
+    keep = np.searchsorted(x, length / d50, side="left") + 1   # first vertex at or past `length`
+    return Profile(x[:keep] * d50, z[:keep] * d50, periodic=False,
+                   name=name or f"random-au{au:g}-ar{ar:g}-rtmax{rtmax:g}-seed{seed}")
+
+
+def tile(profile: Profile, length: float) -> Profile:
+    """Repeat a profile until it covers `length` m from x = 0.
+
+    Periodic profiles repeat seamlessly. A measured (open) profile is repeated as it is, each copy
+    joined to the next by one straight segment of one sample step: the direction of every face (and
+    so θa) is kept, which mirroring copies would not do; the seam adds one short segment per copy.
+    """
+    x = profile.x - profile.x[0]
+    z = profile.z
+    if x[-1] >= length:
+        return Profile(x, z, profile.periodic, profile.name)
+    if profile.periodic:
+        period, body_x, body_z = x[-1], x[:-1], z[:-1]
+    else:
+        step = float(np.median(np.diff(x)))
+        period, body_x, body_z = x[-1] + step, x, z
+    copies = math.ceil(length / period - 1e-12) + (0 if profile.periodic else 1)
+    xs = (body_x[None, :] + period * np.arange(copies)[:, None]).ravel()
+    zs = np.tile(body_z, copies)
+    if profile.periodic:
+        xs, zs = np.append(xs, copies * period), np.append(zs, body_z[0])
+    return Profile(xs, zs, profile.periodic, profile.name)
+
+
+def from_spec(spec: ProfileSpec, d50: float, length: float) -> Profile:
+    """The Profile a Case refers to, starting at x = 0 and covering at least `length` m."""
+    if spec.kind == "flat":
+        return flat(length)
+    if spec.kind == "sawtooth":
+        return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50, length=length)
+    if spec.kind == "random":
+        return random_profile(spec.param("au"), spec.param("ar"), spec.param("rtmax"), d50=d50, length=length,
+                              seed=int(spec.param("seed")))
+    from interphase.surface.readers import prepare_measured, read_profile
+
+    prof = prepare_measured(read_profile(spec.path, units=spec.units), cutoff=spec.cutoff)
+    return tile(prof, length)
+
+
+def units_factor(units: str, where: str = "--units") -> float:
+    """Metres per unit for 'm' | 'mm' | 'um'."""
+    if units not in UNITS:
+        raise InputError(f"unknown units {units!r}", where=where, fix=f"use one of {', '.join(UNITS)}")
+    return UNITS[units]

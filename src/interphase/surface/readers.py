@@ -1,0 +1,146 @@
+"""Readers of measured profiles and their preparation (centerline, resampling, Gaussian filter).
+
+Formats:
+  - Dektak stylus-profilometer export: a header block, then a line "Scan Data", a column-name line
+    ("Lateral um,Raw Micrometer,") and comma-separated rows (trailing empty fields, CRLF, Latin-1 µ).
+    Units come from the column names (um/mm) unless given.
+  - Plain two-column text/CSV: comma, semicolon, tab or spaces; leading header lines that are not
+    numbers are skipped; '#' starts a comment. Units as given (the caller's option).
+Every failure is an InputError naming the file and, where it applies, the line.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.ndimage import gaussian_filter1d
+
+from interphase.errors import InputError
+from interphase.surface.profiles import Profile, units_factor
+
+_NUM = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
+_SPLIT = re.compile(r"[,;\t ]+")
+
+
+def read_profile(path: str | Path, units: str | None = None) -> Profile:
+    """Read a measured profile into metres. `units` ('um' | 'mm' | 'm') overrides the file's own."""
+    path = Path(path)
+    where = str(path)
+    if not path.is_file():
+        raise InputError("file not found", where=where, fix="give the path of a profile file")
+    raw = path.read_bytes()
+    if not raw.strip():
+        raise InputError("the file is empty", where=where, fix="give a file with two columns x, z")
+    # one line break is \n, \r\n, a lone \r, or the \r\r\n some instrument exports write
+    phys = re.split(r"\r*\n|\r", raw.decode("latin-1"))
+    start, file_units = _find_table(phys)
+    if units is None:
+        units = file_units or "mm"
+    factor = units_factor(units)
+    rows = phys[start:]
+    first = start + 1   # 1-based number of the first table line
+    # keep non-empty, non-comment lines with their line numbers
+    numbers = np.arange(first, first + len(rows))
+    body = pd.Series(rows, dtype=object).str.split("#", n=1).str[0].str.strip().str.strip(",;")
+    keep = body.str.len() > 0
+    body, numbers = body[keep], numbers[keep.to_numpy()]
+    if body.empty:
+        raise InputError("no data rows", where=where, fix="the file needs rows of two numbers x, z")
+    cols = body.str.split(_SPLIT, regex=True)
+    ncol = cols.str.len().to_numpy()
+    if np.any(ncol < 2):
+        i = int(np.argmax(ncol < 2))
+        raise InputError(f"line {numbers[i]} has one column ({body.iloc[i]!r})", where=where,
+                         fix="each row needs two numbers: x and z")
+    xs = cols.str[0]
+    zs = cols.str[1]
+    x = pd.to_numeric(xs, errors="coerce").to_numpy(float)
+    z = pd.to_numeric(zs, errors="coerce").to_numpy(float)
+    for arr, src, name in ((x, xs, "x"), (z, zs, "z")):
+        bad = np.isnan(arr)
+        if bad.any():
+            i = int(np.argmax(bad))
+            token = src.iloc[i]
+            what = "NaN" if token.strip().lower() in ("nan", "na", "n/a") else f"text {token!r}"
+            raise InputError(f"line {numbers[i]}: {what} where a number ({name}) was expected", where=where,
+                             fix="remove or repair that row")
+        if np.isinf(arr).any():
+            i = int(np.argmax(np.isinf(arr)))
+            raise InputError(f"line {numbers[i]}: infinite {name}", where=where, fix="remove or repair that row")
+    step = np.diff(x)
+    if np.any(step <= 0):
+        i = int(np.argmax(step <= 0)) + 1
+        raise InputError(f"line {numbers[i]}: x = {x[i]:g} does not increase (previous {x[i-1]:g})",
+                         where=where, fix="x must increase strictly down the file; sort it or drop repeats")
+    if x.size < 3:
+        raise InputError(f"only {x.size} data rows", where=where, fix="a profile needs at least 3 points")
+    return Profile(x * factor, z * factor, periodic=False, name=path.stem)
+
+
+def _find_table(lines: list[str]) -> tuple[int, str | None]:
+    """Index of the first data line and the units the file declares (Dektak), else (first numeric, None)."""
+    for i, line in enumerate(lines):
+        if line.strip().lower() == "scan data":
+            j = i + 1
+            while j < len(lines) and not lines[j].strip():
+                j += 1
+            header = lines[j] if j < len(lines) else ""
+            m = re.search(r"lateral\s*\(?\s*(um|µm|mm|m)\b", header, re.IGNORECASE)
+            units = None
+            if m:
+                units = {"µm": "um"}.get(m.group(1), m.group(1).lower())
+            return j + 1, units
+    for i, line in enumerate(lines):
+        parts = [p for p in _SPLIT.split(line.split("#", 1)[0].strip().strip(",;")) if p]
+        if len(parts) >= 1 and all(_NUM.match(p) or p.lower() in ("nan", "inf", "-inf") for p in parts[:2]):
+            return i, None
+        if i > 50:
+            break
+    return 0, None
+
+
+def centerline(profile: Profile) -> Profile:
+    """Remove the least-squares line z = a + b·x (the centerline correction)."""
+    b, a = np.polyfit(profile.x, profile.z, 1)
+    return Profile(profile.x, profile.z - (a + b * profile.x), profile.periodic, profile.name)
+
+
+def resample(profile: Profile, dx: float) -> Profile:
+    """Linear interpolation on a uniform step close to `dx` [m] spanning the same x range."""
+    n = max(2, int(math.ceil(profile.length / dx)) + 1)
+    x = np.linspace(profile.x[0], profile.x[-1], n)
+    return Profile(x, np.interp(x, profile.x, profile.z), profile.periodic, profile.name)
+
+
+def gaussian_filter(profile: Profile, cutoff: float, keep: str = "roughness") -> Profile:
+    """ISO 16610-21 style Gaussian profile filter with cut-off wavelength `cutoff` [m].
+
+    The weighting function s(x) = exp(−π (x/(α λc))²)/(α λc), α = sqrt(ln 2/π), is a Gaussian of
+    standard deviation α λc / sqrt(2π); it passes 50 % amplitude at λc. The filtered line is the
+    waviness; keep='roughness' (default) returns z − waviness, keep='waviness' the line itself.
+    The profile is resampled uniformly first (median step). Ends: mirror extension (scipy 'reflect').
+    """
+    if not (math.isfinite(cutoff) and cutoff > 0):
+        raise InputError(f"cut-off must be a positive length, got {cutoff!r}", where="cutoff")
+    if keep not in ("roughness", "waviness"):
+        raise InputError(f"keep must be roughness or waviness, got {keep!r}", where="keep")
+    dx = float(np.median(np.diff(profile.x)))
+    uni = resample(profile, dx)
+    alpha = math.sqrt(math.log(2) / math.pi)
+    sigma = alpha * cutoff / math.sqrt(2 * math.pi) / (uni.x[1] - uni.x[0])
+    wav = gaussian_filter1d(uni.z, sigma, mode="wrap" if profile.periodic else "reflect")
+    z = uni.z - wav if keep == "roughness" else wav
+    return Profile(uni.x, z, profile.periodic, profile.name)
+
+
+def prepare_measured(profile: Profile, cutoff: float | None = None) -> Profile:
+    """The study's recipe for a measured profile: centerline-corrected, optionally Gaussian-filtered."""
+    out = centerline(profile)
+    if cutoff is not None:
+        out = gaussian_filter(out, cutoff)
+    return out
