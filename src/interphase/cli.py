@@ -14,13 +14,129 @@ from interphase import __version__
 from interphase.errors import InputError
 
 
+def _jsonable(obj):
+    """NaN/inf → null (strict JSON); numpy scalars → Python numbers."""
+    import math
+
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, (str, bytes)):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
 def _print_json(obj) -> None:
-    print(json.dumps(obj, indent=2, sort_keys=True, default=float))
+    print(json.dumps(_jsonable(obj), indent=2, sort_keys=True, allow_nan=False))
 
 
 # ---- surface toolkit: theta-a, profile ------------------------------------------------------
 def _add_surface(sub) -> None:
-    pass
+    p = sub.add_parser("theta-a", help="θa, Rn, Rnc and mean asperity slope of a profile file")
+    p.add_argument("profile", help="profile file: Dektak export or two columns x z")
+    p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
+    p.add_argument("--filter", type=int, default=92, choices=(92, 90),
+                   help="keep trace normals > 92° (default, construction surfaces) or ≥ 90° (regular flat spacing)")
+    p.add_argument("--units", default=None, help="units of the file's x and z: um | mm | m "
+                   "(default: the file's own for a Dektak export, else mm)")
+    p.add_argument("--cutoff", type=float, default=None, help="Gaussian filter cut-off λc [mm] (default: unfiltered)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_theta_a)
+
+    p = sub.add_parser("profile", help="generate, convert or plot surface profiles")
+    psub = p.add_subparsers(dest="profile_command", required=True, metavar="KIND")
+    common = dict(d50=("--d50", dict(type=float, default=0.7, help="D50 [mm] (sizes below are in D50)")),
+                  length=("--length", dict(type=float, default=30.0, help="profile length [mm]")))
+    for kind, params, text in (
+        ("sawtooth", ("rt", "sw"), "Groups 1 and 3: triangles, no spacing"),
+        ("spaced", ("rt", "sw", "sr"), "Group 2: triangles with flat spacing Sr"),
+        ("random", ("au", "ar", "rtmax", "seed"), "Group 4: random segments (Au, Ar, Rtmax, seed)"),
+    ):
+        q = psub.add_parser(kind, help=text)
+        for name in params:
+            q.add_argument(f"--{name}", type=int if name == "seed" else float, required=True,
+                           help="integer seed" if name == "seed" else f"{name} [D50]")
+        for flag, kw in common.values():
+            q.add_argument(flag, **kw)
+        q.add_argument("-o", "--output", required=True, help="output file (two columns x z in mm)")
+        q.set_defaults(func=_cmd_profile_make, kind=kind)
+    q = psub.add_parser("plot", help="profile, centroid trace and polar normal distribution to PNG")
+    q.add_argument("profile")
+    q.add_argument("--d50", type=float, default=0.7, help="D50 [mm]")
+    q.add_argument("--units", default=None, help="um | mm | m (default: file's own, else mm)")
+    q.add_argument("--filter", type=int, default=92, choices=(92, 90))
+    q.add_argument("-o", "--output", default=None, help="PNG path (default: PROFILE.png)")
+    q.set_defaults(func=_cmd_profile_plot)
+
+
+def _d50_m(value: float) -> float:
+    import math
+
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"must be a positive diameter in mm, got {value!r}", where="--d50")
+    return value * 1e-3
+
+
+def _load_measured(path: str, units, cutoff_mm=None):
+    from interphase.surface.readers import prepare_measured, read_profile
+
+    if units is not None:
+        from interphase.surface.profiles import units_factor
+        units_factor(units)   # refuse unknown units before reading
+    if cutoff_mm is not None and not cutoff_mm > 0:
+        raise InputError(f"must be a positive length in mm, got {cutoff_mm!r}", where="--cutoff")
+    return prepare_measured(read_profile(path, units=units), None if cutoff_mm is None else cutoff_mm * 1e-3)
+
+
+def _cmd_theta_a(args) -> int:
+    from interphase.surface.normals import theta_a
+
+    d50 = _d50_m(args.d50)
+    res = theta_a(_load_measured(args.profile, args.units, args.cutoff), d50, args.filter)
+    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50}
+    if args.json:
+        _print_json(out)
+        return 0
+    print(f"profile            {args.profile}  (D50 = {args.d50:g} mm, filter {args.filter}°)")
+    if res.dilative:
+        print(f"θa                 {res.theta_a_deg:.2f}° from vertical  ({res.theta_a_ccw_deg:.2f}° ccw from +x)")
+    else:
+        print(f"θa                 undefined — {res.reason}")
+    print(f"Rn, Rnc(D50)       {res.rn:.4f}, {res.rnc:.4f}")
+    print(f"mean asperity slope {res.mean_slope_deg:.2f}° (flats < 2° excluded)")
+    print(f"trace points       {res.n_points}")
+    return 0
+
+
+def _cmd_profile_make(args) -> int:
+    import numpy as np
+
+    from interphase.surface.profiles import random_profile, sawtooth
+
+    d50 = _d50_m(args.d50)
+    if not args.length > 0:
+        raise InputError(f"must be > 0, got {args.length!r}", where="--length")
+    length = args.length * 1e-3
+    if args.kind == "random":
+        prof = random_profile(args.au, args.ar, args.rtmax, d50=d50, length=length, seed=args.seed)
+    else:
+        prof = sawtooth(args.rt, args.sw, getattr(args, "sr", 0.0), d50=d50, length=length)
+    np.savetxt(args.output, np.column_stack([prof.x, prof.z]) * 1e3, fmt="%.9g",
+               header=f"x_mm z_mm  {prof.name} D50={args.d50:g}mm", comments="# ")
+    print(f"wrote {args.output} ({prof.x.size} vertices, {prof.length * 1e3:.3f} mm)")
+    return 0
+
+
+def _cmd_profile_plot(args) -> int:
+    from interphase.surface.plot import plot_profile
+
+    out = args.output or (args.profile.rsplit(".", 1)[0] + ".png")
+    plot_profile(_load_measured(args.profile, args.units), _d50_m(args.d50), out, args.filter)
+    print(f"wrote {out}")
+    return 0
 
 
 # ---- single cases and engines: render, run-case ----------------------------------------------

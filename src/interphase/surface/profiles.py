@@ -86,8 +86,9 @@ def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: fl
         mean projections);
       - sign rule: each segment goes up or down with probability ½ (numpy PCG64 seeded by `seed`);
       - bound rule: the running height stays in [0, rtmax]: a step that would leave the band is
-        reflected (its sign flipped); if the reflected step also leaves it, the step is clipped to the
-        bound it crosses. The walk starts at rtmax/2.
+        reflected (its sign flipped); if the reflected step leaves it too (a step longer than the
+        band allows either way), the segment runs to the farther bound, so no segment is flat.
+        The walk starts at rtmax/2.
     """
     if au <= 0 or ar <= 0 or rtmax <= 0:
         raise InputError(f"need au, ar, rtmax > 0 (D50 units), got {au}, {ar}, {rtmax}", where="random profile")
@@ -101,10 +102,13 @@ def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: fl
     z = np.empty(n + 1)
     z[0] = rtmax / 2
     for i in range(n):
-        step = dz[i]
-        if not 0.0 <= z[i] + step <= rtmax:
-            step = -step
-        z[i + 1] = min(max(z[i] + step, 0.0), rtmax)
+        up, down = z[i] + dz[i], z[i] - dz[i]
+        if 0.0 <= up <= rtmax:
+            z[i + 1] = up
+        elif 0.0 <= down <= rtmax:
+            z[i + 1] = down
+        else:
+            z[i + 1] = 0.0 if z[i] > rtmax / 2 else rtmax
     x = np.concatenate([[0.0], np.cumsum(au * m)])
     keep = np.searchsorted(x, length / d50, side="left") + 1   # first vertex at or past `length`
     return Profile(x[:keep] * d50, z[:keep] * d50, periodic=False,
