@@ -68,8 +68,9 @@ def sawtooth(rt: float, sw: float, sr: float = 0.0, *, d50: float, length: float
         if length is None:
             raise InputError("give length or periods", where="sawtooth")
         periods = max(1, math.ceil(length / lam - 1e-9))
-    one_x = np.array([0.0, sw / 2, sw] + ([sw + sr] if sr > 0 else [])) * d50
-    one_z = np.array([0.0, rt, 0.0] + ([0.0] if sr > 0 else [])) * d50
+    spaced = sr > 1e-9 * sw      # a spacing below a nanometre-per-metre of the base is no spacing
+    one_x = np.array([0.0, sw / 2, sw] + ([sw + sr] if spaced else [])) * d50
+    one_z = np.array([0.0, rt, 0.0] + ([0.0] if spaced else [])) * d50
     k = np.arange(periods)[:, None] * lam
     x = np.concatenate([(one_x[:-1] + k).ravel(), [periods * lam]])
     z = np.concatenate([np.tile(one_z[:-1], periods), [0.0]])
