@@ -38,7 +38,7 @@ class Case:
     density: float = 2650.0                 # [kg/m³]
     shear_modulus: float = 29e9             # [Pa] (study: 29 GPa; campaigns may soften it, see docs)
     poisson: float = 0.3                    # [-]
-    restitution: float = 0.1                # normal coefficient of restitution [-]
+    restitution: float = 0.5                # normal coefficient of restitution [-] (damping ratio 0.215; see docs/liggghts.md)
     normal_stress: float = 100e3            # [Pa], compression positive
     shear_velocity: float = 0.05            # [m/s]
     shear_distance: float = 3e-3            # [m]

@@ -6,6 +6,7 @@ triangles wound so that their normals point up (+z, into the soil).
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import meshio
@@ -36,3 +37,25 @@ def write_stl(profile: Profile, path: str | Path, y_min: float, y_max: float) ->
     path = Path(path)
     meshio.write(path, stl_mesh(profile, y_min, y_max), file_format="stl", binary=False)
     return path
+
+
+def segment_triangles(segments: np.ndarray, y_min: float, y_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Walls from x–z segments: `segments` (M, 4) rows x0, z0, x1, z1 [m], each extruded in y as two
+    triangles; the normal is (x1−x0, z1−z0) turned +90° (left of the direction of travel)."""
+    s = np.asarray(segments, dtype=float).reshape(-1, 4)
+    m = s.shape[0]
+    a = np.column_stack([s[:, 0], np.full(m, y_min), s[:, 1]])
+    b = np.column_stack([s[:, 2], np.full(m, y_min), s[:, 3]])
+    c = np.column_stack([s[:, 2], np.full(m, y_max), s[:, 3]])
+    d = np.column_stack([s[:, 0], np.full(m, y_max), s[:, 1]])
+    points = np.vstack([a, b, c, d])
+    i = np.arange(m)
+    tri = np.vstack([np.column_stack([i, m + i, 2 * m + i]), np.column_stack([i, 2 * m + i, 3 * m + i])])
+    return points, tri
+
+
+def stl_text(points: np.ndarray, triangles: np.ndarray) -> str:
+    """ASCII STL of a triangle set, as text (meshio's writer into memory)."""
+    buf = io.StringIO()
+    meshio.stl.write(buf, meshio.Mesh(points, [("triangle", triangles)]), binary=False)
+    return buf.getvalue()

@@ -1,0 +1,253 @@
+"""LIGGGHTS engine: Case → deck + data + STL files → `liggghts` subprocess → Results.
+
+Geometry (x = shear axis, z up, y out of plane; one grain layer, centres at y = 0):
+  interface: the soil box [0, L] × [surface top, …] with fixed side walls whose bottoms sit a small
+    gap above the surface's highest point; the rough surface (the profile, extruded in y) slides in
+    −x beneath it at the shear velocity; a servo platen holds the normal force σ·L·t on top.
+  box: a direct shear box of height H split at H/2; the lower half slides −x; flanges close the
+    openings the slide uncovers.
+Quasi-2D thickness t = D50 converts stress to force (F = σ·L·t). Time step dt = 0.2·T_R of the
+smallest grain (Rayleigh). Rolling friction: the `cdt` model (constant directional torque; the only
+rolling model on LIGGGHTS's optimised whitelist) with coefficient case.rolling_friction at every
+contact. Damping: LIGGGHTS's Hertz damping from the coefficient of restitution case.restitution.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import re
+import shlex
+import shutil
+import signal
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from interphase import __version__
+from interphase.case import Case
+from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register
+from interphase.engines.packing import lattice_packing, write_liggghts_data
+from interphase.engines.render import environment
+from interphase.material import rayleigh_time, youngs_modulus
+from interphase.surface.mesh import extruded_triangles, segment_triangles, stl_text
+from interphase.surface.profiles import from_spec
+
+THROUGHPUT = 1.5e6     # particle-steps per second assumed for the timeout estimate (measured 2.5–4e6)
+CONSOLIDATION_TIME = 0.02   # [s] of platen servo consolidation before shear
+HISTORY_POINTS = 400        # history rows over the shear
+
+
+def quasi2d_thickness(case: Case) -> float:
+    """Out-of-plane thickness t [m] that turns a stress into a force on the monolayer: t = D50."""
+    return case.d50
+
+
+def time_step(case: Case) -> float:
+    """dt = 0.2 × Rayleigh time of the smallest grain [s]."""
+    return 0.2 * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus, case.poisson)
+
+
+def _steps(duration: float, dt: float) -> int:
+    return max(1, int(math.ceil(duration / dt)))
+
+
+@register
+class Liggghts(Engine):
+    name = "liggghts"
+
+    @classmethod
+    def default_profile(cls) -> EngineProfile:
+        return EngineProfile(
+            binary=os.environ.get("INTERPHASE_LIGGGHTS_BINARY", "liggghts"),
+            launcher=tuple(shlex.split(os.environ.get("INTERPHASE_LIGGGHTS_LAUNCHER", ""))),
+            threads=int(os.environ.get("INTERPHASE_LIGGGHTS_THREADS", "1")),
+            timeout=float(os.environ["INTERPHASE_LIGGGHTS_TIMEOUT"]) if "INTERPHASE_LIGGGHTS_TIMEOUT" in os.environ else None,
+        )
+
+    def version(self) -> str:
+        return _version(self.profile.binary)
+
+    # ---- input -----------------------------------------------------------------------------
+    def geometry(self, case: Case) -> dict:
+        """Every derived size of the deck [m, N, s] and the mesh files' text."""
+        d_min, d_max, d50 = case.gradation.d_min, case.gradation.d_max, case.d50
+        L, H, D = case.box_length, case.box_height, case.shear_distance
+        t = quasi2d_thickness(case)
+        y0, y1 = -0.45 * d_max * 2, 0.45 * d_max * 2          # meshes a little thinner than the box
+        margin = 2 * d_max
+        dt = time_step(case)
+        files: dict[str, str] = {}
+        if case.test == "interface":
+            prof = from_spec(case.profile, d50, L + D + 2 * margin)
+            x = prof.x - margin
+            z = prof.z
+            top = float(z.max())
+            gap = 0.05 * d_min
+            floor = top + 0.02 * d_max
+            pack = lattice_packing(case, 0.0, L, floor)
+            wall_top = pack.top + 3 * d_max
+            pts, tri = extruded_triangles(type(prof)(x, z, prof.periodic, prof.name), y0, y1)
+            files["surface.stl"] = stl_text(pts, tri)
+            sides = [[0.0, wall_top, 0.0, top + gap], [L, top + gap, L, wall_top]]
+            files["sides.stl"] = stl_text(*segment_triangles(sides, y0, y1))
+            z_lo = float(z.min()) - d_max
+            x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max   # the surface travels −D
+            moving, fixed = "surf", "sides"
+        else:
+            z_mid = H / 2
+            gap = 0.05 * d_min
+            pack = lattice_packing(case, 0.0, L, 0.0)
+            wall_top = max(pack.top, H) + 3 * d_max
+            far = D + margin
+            lower = [[-far, 0.0, L + far, 0.0],                 # bottom (normal up)
+                     [0.0, z_mid - gap, 0.0, 0.0],              # left side (normal +x)
+                     [L, 0.0, L, z_mid - gap],                  # right side (normal −x)
+                     [L + far, z_mid - gap, L, z_mid - gap]]    # right flange (normal down... both sides act)
+            upper = [[0.0, wall_top, 0.0, z_mid], [L, z_mid, L, wall_top],
+                     [0.0, z_mid, -far, z_mid]]                 # left flange
+            files["lower.stl"] = stl_text(*segment_triangles(lower, y0, y1))
+            files["upper.stl"] = stl_text(*segment_triangles(upper, y0, y1))
+            z_lo = -d_max
+            x_lo, x_hi = -far - D - d_max, L + far + d_max
+            moving, fixed = "lower", "upper"
+        platen_z = pack.top + 0.5 * d_max
+        inset = 0.02 * d_max
+        files["platen.stl"] = stl_text(*segment_triangles([[L - inset, platen_z, inset, platen_z]], y0, y1))
+        z_hi = wall_top + 2 * d_max
+        box = (x_lo, x_hi, -d_max, d_max, z_lo, z_hi)
+        files["grains.data"] = write_liggghts_data(pack, case.density, box)
+        skin = 0.2 * d_min
+        return dict(files=files, dt=dt, skin=skin, moving=moving, fixed=fixed, n_grains=pack.n,
+                    platen_com=(L / 2, platen_z), platen_force=case.normal_stress * L * t,
+                    servo_vmax=min(0.1, 0.5 * skin / (2 * dt)), thickness=t, box=box)
+
+    def parameters(self, case: Case) -> dict:
+        """The template's values (all numbers or validated names) and the mesh/data files."""
+        g = self.geometry(case)
+        dt = g["dt"]
+        # type pairs (1 grain, 2 surface/lower box, 3 other walls); wall–wall pairs never meet
+        mu = [case.friction_pp, case.friction_ps, case.friction_pw,
+              case.friction_ps, 0.0, 0.0,
+              case.friction_pw, 0.0, 0.0]
+        rr = [case.rolling_friction] * 9
+        n_shear = _steps(case.shear_distance / case.shear_velocity, dt)
+        n_snap = max(1, int(round(case.snapshot_every / case.shear_velocity / dt)))
+        # history every n_history steps, a divisor of the snapshot interval so that every contact
+        # snapshot has a history row at the same step (mesh force vs summed contacts)
+        k = max(1, round(n_snap / max(1, n_shear // HISTORY_POINTS)))
+        n_history = max(1, n_snap // k)
+        n_snap = n_history * k
+        params = dict(
+            version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
+            E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson,
+            restitution=[case.restitution] * 9, friction=mu, rolling=rr, rolling_model="cdt",
+            dt=dt, skin=g["skin"], moving=g["moving"], fixed=g["fixed"],
+            platen_com=g["platen_com"], platen_force=g["platen_force"], servo_vmax=g["servo_vmax"],
+            servo_ratio=1e-4, shear_velocity=case.shear_velocity,
+            n_consolidate=-(-_steps(CONSOLIDATION_TIME, dt) // n_snap) * n_snap, n_shear=n_shear,
+            n_snapshot=n_snap,
+            n_history=n_history, n_thermo=max(1, n_shear // 20),
+        )
+        return dict(params=params, geometry=g)
+
+    def template_name(self, case: Case) -> str:
+        return "interface_shear.in.j2" if case.test == "interface" else "direct_shear.in.j2"
+
+    def render(self, case: Case) -> dict[str, str | bytes]:
+        p = self.parameters(case)
+        deck = environment(self.templates).get_template(self.template_name(case)).render(**p["params"])
+        files = {"in.deck": deck, **p["geometry"]["files"]}
+        meta = {k: v for k, v in p["params"].items()}
+        meta.update(thickness=p["geometry"]["thickness"], n_grains=p["geometry"]["n_grains"], shear_sign=1)
+        import json
+        files["engine.json"] = json.dumps(meta, indent=1, default=float)
+        return files
+
+    # ---- run -------------------------------------------------------------------------------
+    def timeout_for(self, folder: Path) -> float:
+        if self.profile.timeout is not None:
+            return self.profile.timeout
+        import json
+        meta = json.loads((folder / "engine.json").read_text())
+        steps = meta["n_consolidate"] + meta["n_shear"]
+        return 60.0 + 5.0 * steps * meta["n_grains"] / THROUGHPUT
+
+    def command(self) -> list[str]:
+        binary = shutil.which(self.profile.binary) or self.profile.binary
+        base = [binary, "-in", "in.deck", "-log", "log.liggghts", "-echo", "none"]
+        stdbuf = shutil.which("stdbuf")
+        # error->one text is lost when stdout is redirected unless unbuffered (ENGINES.md)
+        prefix = [stdbuf, "-o0", "-e0"] if stdbuf else []
+        return [*self.profile.launcher, *prefix, *base]
+
+    def execute(self, folder: str | os.PathLike) -> None:
+        folder = Path(folder)
+        cmd = self.command()
+        if shutil.which(self.profile.binary) is None:
+            raise EngineError("not_installed", f"LIGGGHTS binary {self.profile.binary!r} not found",
+                              command=cmd, folder=folder)
+        env = dict(os.environ, OMP_NUM_THREADS=str(self.profile.threads))
+        timeout = self.timeout_for(folder)
+        log = folder / "engine.log"
+        with open(log, "wb") as out:
+            proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
+                                    start_new_session=True)
+            try:
+                rc = proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+                raise EngineError("timeout", f"LIGGGHTS ran longer than {timeout:.0f} s", command=cmd,
+                                  log_tail=log_tail(log), folder=folder) from None
+            except BaseException:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+                raise
+        text = log_tail(log, 60)
+        cause = classify(rc, text)
+        if cause:
+            first = next((ln for ln in text.splitlines() if "ERROR" in ln), f"return code {rc}")
+            raise EngineError(cause, first.strip(), command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
+        for name in ("history.txt", "contacts_pair.dump", "contacts_wall.dump"):
+            if not (folder / name).exists():
+                raise EngineError("missing_output", f"LIGGGHTS finished without writing {name}", command=cmd,
+                                  returncode=rc, log_tail=log_tail(log), folder=folder)
+
+    def read_results(self, folder: str | os.PathLike) -> Results:
+        from interphase.io.liggghts import read_folder
+
+        return read_folder(folder)
+
+
+def classify(returncode: int, text: str) -> str | None:
+    """Cause of a failed run from its return code and log text, None if it succeeded."""
+    if re.search(r"Lost atoms", text):
+        return "lost_atoms"
+    if re.search(r"ERROR.*(mesh|STL|stl|triangle|facet)|mesh.*ERROR", text):
+        return "bad_mesh"
+    if returncode is not None and returncode < 0:
+        return "killed"
+    if returncode in (137, 143):
+        return "killed"
+    if "ERROR" in text:
+        return "engine_error"
+    if returncode != 0:
+        return "engine_error"
+    return None
+
+
+@functools.lru_cache(maxsize=None)
+def _version(binary: str) -> str:
+    """'LIGGGHTS-PUBLIC 3.8.0 …' from the binary's help banner (cached per binary)."""
+    path = shutil.which(binary)
+    if path is None:
+        return "not-installed"
+    try:
+        out = subprocess.run([path, "-h"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.TimeoutExpired):
+        return "unknown"
+    m = re.search(r"(LIGGGHTS-PUBLIC \d+\.\d+\.\d+)", out)
+    return m.group(1).strip() if m else "unknown"
