@@ -32,7 +32,7 @@ from interphase.engines.base import Engine, EngineError, EngineProfile, Results,
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
-from interphase.surface.mesh import extruded_triangles, segment_triangles, stl_text
+from interphase.surface.mesh import inplane_triangles, segment_triangles, stl_text
 from interphase.surface.profiles import from_spec
 
 THROUGHPUT = 1.5e6     # particle-steps per second assumed for the timeout estimate (measured 2.5–4e6)
@@ -89,7 +89,7 @@ class Liggghts(Engine):
             floor = top + 0.02 * d_max
             pack = lattice_packing(case, 0.0, L, floor)
             wall_top = pack.top + 3 * d_max
-            pts, tri = extruded_triangles(type(prof)(x, z, prof.periodic, prof.name), y0, y1)
+            pts, tri = inplane_triangles(type(prof)(x, z, prof.periodic, prof.name), y1)
             files["surface.stl"] = stl_text(pts, tri)
             sides = [[0.0, wall_top, 0.0, top + gap], [L, top + gap, L, wall_top]]
             files["sides.stl"] = stl_text(*segment_triangles(sides, y0, y1))
@@ -246,7 +246,9 @@ def _version(binary: str) -> str:
     if path is None:
         return "not-installed"
     try:
-        out = subprocess.run([path, "-h"], capture_output=True, text=True, timeout=30).stdout
+        import tempfile
+        with tempfile.TemporaryDirectory() as tmp:   # `liggghts -h` writes log.liggghts into its cwd
+            out = subprocess.run([path, "-h"], capture_output=True, text=True, timeout=30, cwd=tmp).stdout
     except (OSError, subprocess.TimeoutExpired):
         return "unknown"
     m = re.search(r"(LIGGGHTS-PUBLIC \d+\.\d+\.\d+)", out)

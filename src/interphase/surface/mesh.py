@@ -59,3 +59,23 @@ def stl_text(points: np.ndarray, triangles: np.ndarray) -> str:
     buf = io.StringIO()
     meshio.stl.write(buf, meshio.Mesh(points, [("triangle", triangles)]), binary=False)
     return buf.getvalue()
+
+
+def inplane_triangles(profile: Profile, width: float) -> tuple[np.ndarray, np.ndarray]:
+    """One triangle per segment with an edge IN the particle plane y = 0: (x0, 0, z0), (x1, 0, z1),
+    and an apex at the segment's midpoint pushed to y = width.
+
+    Why: a rectangle of two triangles puts its diagonal across y = 0, where a grain touching the
+    face can register a contact with both triangles (a double contact, seen in LIGGGHTS dumps). With
+    the in-plane edge, each grain–segment contact is one contact; neighbouring triangles share only
+    the profile vertex. Normals point up (+z). Points are (x, y, z) [m].
+    """
+    x, z = profile.x, profile.z
+    n = x.size
+    base = np.column_stack([x, np.zeros(n), z])
+    apex = np.column_stack([0.5 * (x[:-1] + x[1:]), np.full(n - 1, width), 0.5 * (z[:-1] + z[1:])])
+    points = np.vstack([base, apex])
+    i = np.arange(n - 1)
+    # (x0, x1, apex at +y): normal = (B−A)×(C−A) has z-component dx·width > 0
+    tri = np.column_stack([i, i + 1, n + i])
+    return points, tri
