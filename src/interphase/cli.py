@@ -141,7 +141,76 @@ def _cmd_profile_plot(args) -> int:
 
 # ---- single cases and engines: render, run-case ----------------------------------------------
 def _add_engine(sub) -> None:
-    pass
+    for cmd, text in (("render", "write a case's engine input files (dry run) and list them"),
+                      ("run-case", "render, run and read one case; print where its results are")):
+        p = sub.add_parser(cmd, help=text)
+        p.add_argument("case", help="TOML file with a [case] table (Case fields, SI units)")
+        p.add_argument("-o", "--output", required=True, help="case folder to write")
+        p.add_argument("--engine", default="liggghts", help="liggghts | yade")
+        p.add_argument("--json", action="store_true", help="print JSON")
+        p.set_defaults(func=_cmd_render if cmd == "render" else _cmd_run_case)
+
+
+def _load_case(path: str):
+    import tomllib
+    from pathlib import Path
+
+    from interphase.case import case_from_dict
+
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except FileNotFoundError:
+        raise InputError("file not found", where=path, fix="give a TOML file with a [case] table") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"TOML syntax error: {exc}", where=path) from None
+    if "case" not in data or not isinstance(data["case"], dict):
+        raise InputError("no [case] table", where=path, fix="put the Case fields under [case]")
+    return case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
+
+
+def _cmd_render(args) -> int:
+    from interphase.engines.base import get_engine
+
+    engine = get_engine(args.engine)
+    files = engine.write_input(_load_case(args.case), args.output)
+    if args.json:
+        _print_json({"folder": args.output, "files": sorted(files)})
+    else:
+        print("\n".join(f"{args.output}/{name}" for name in sorted(files)))
+    return 0
+
+
+def _cmd_run_case(args) -> int:
+    from pathlib import Path
+
+    from interphase.engines.base import EngineError, get_engine
+
+    case = _load_case(args.case)
+    engine = get_engine(args.engine)
+    folder = Path(args.output)
+    engine.write_input(case, folder)
+    try:
+        engine.execute(folder)
+    except EngineError as exc:
+        print(f"campaign run-case: {args.engine} failed: {exc}", file=sys.stderr)
+        return 1
+    res = engine.read_results(folder)
+    res.contacts.to_parquet(folder / "contacts.parquet")
+    res.history.to_parquet(folder / "history.parquet")
+    if res.particles is not None:
+        res.particles.to_parquet(folder / "particles.parquet")
+    h = res.history
+    ratio = (h.surface_fx / -h.surface_fz).rolling(9, center=True, min_periods=1).mean()
+    out = {"folder": str(folder), "contacts": str(folder / "contacts.parquet"),
+           "history": str(folder / "history.parquet"), "peak_stress_ratio": float(ratio.max()),
+           "n_snapshots": int(res.contacts.snapshot.nunique())}
+    if args.json:
+        _print_json(out)
+    else:
+        for k, v in out.items():
+            print(f"{k:18s} {v}")
+    return 0
 
 
 # ---- campaigns: run, status, crosscheck --------------------------------------------------------

@@ -1,0 +1,44 @@
+"""`campaign render` and `campaign run-case` from a TOML [case] snippet (real LIGGGHTS)."""
+
+import json
+
+import pandas as pd
+import pytest
+
+from interphase.cli import main
+
+CASE = """[case]
+test = "interface"
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 5e7
+n_grains = 150
+box_length_d50 = 15
+box_height_d50 = 10
+shear_distance = 0.001
+snapshot_every = 0.0005
+"""
+
+
+@pytest.mark.liggghts
+def test_render_then_run_case(tmp_path, capsys):
+    toml = tmp_path / "c.toml"
+    toml.write_text(CASE)
+    assert main(["render", str(toml), "-o", str(tmp_path / "dry"), "--json"]) == 0
+    files = json.loads(capsys.readouterr().out)["files"]
+    assert "in.deck" in files and (tmp_path / "dry" / "surface.stl").exists()
+    assert main(["run-case", str(toml), "-o", str(tmp_path / "run"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    h = pd.read_parquet(out["history"])
+    assert len(h) > 50 and out["peak_stress_ratio"] > 0.3
+
+
+@pytest.mark.parametrize("extra,needle", [("frction_pp = 1", "did you mean 'friction_pp'"),
+                                          ("d50 = -1", "case.d50"), ("seed = 1.5", "seed"),
+                                          ("profile = {kind = 'zigzag'}", "profile.kind")])
+def test_bad_case_toml_exit_2(tmp_path, capsys, extra, needle):
+    toml = tmp_path / "bad.toml"
+    toml.write_text(CASE.replace('profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}\n', "") + extra + "\n"
+                    if "profile" in extra else CASE + extra + "\n")
+    assert main(["render", str(toml), "-o", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert str(toml) in err and needle in err
