@@ -5,8 +5,10 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
-# engines + a one-node SLURM for the cluster tests; binaries checked by name, installed if absent
-DEBS := liggghts yade munge slurmctld slurmd slurm-client
+# the engines (with their recommended packages) and a one-node SLURM for the cluster tests (without);
+# binaries are checked by name and their packages installed if absent
+ENGINE_DEBS := liggghts yade
+SLURM_DEBS := munge slurmctld slurmd slurm-client
 BINS := liggghts yade munged slurmctld slurmd sbatch
 
 .PHONY: all deps debs venv test run bench clean
@@ -18,7 +20,8 @@ debs:
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages (missing:$$missing)"; \
 	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(DEBS) python3-venv; \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(ENGINE_DEBS) python3-venv && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(SLURM_DEBS); \
 	fi
 
 $(VENV)/.installed: pyproject.toml
