@@ -98,6 +98,12 @@ class Case:
         return self.box_length_d50 * self.d50
 
     @property
+    def thickness(self) -> float:
+        """Quasi-2D out-of-plane thickness t [m] that converts stress to force on the monolayer
+        (F = σ·L·t): one grain layer, t = D50. Both engines and the analysis use it."""
+        return self.d50
+
+    @property
     def box_height(self) -> float:
         """Soil height [m]."""
         return self.box_height_d50 * self.d50

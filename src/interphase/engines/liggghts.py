@@ -40,11 +40,6 @@ CONSOLIDATION_TIME = 0.02   # [s] of platen servo consolidation before shear
 HISTORY_POINTS = 400        # history rows over the shear
 
 
-def quasi2d_thickness(case: Case) -> float:
-    """Out-of-plane thickness t [m] that turns a stress into a force on the monolayer: t = D50."""
-    return case.d50
-
-
 def time_step(case: Case) -> float:
     """dt = 0.2 × Rayleigh time of the smallest grain [s]."""
     return 0.2 * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus, case.poisson)
@@ -75,7 +70,7 @@ class Liggghts(Engine):
         """Every derived size of the deck [m, N, s] and the mesh files' text."""
         d_min, d_max, d50 = case.gradation.d_min, case.gradation.d_max, case.d50
         L, H, D = case.box_length, case.box_height, case.shear_distance
-        t = quasi2d_thickness(case)
+        t = case.thickness
         y0, y1 = -0.45 * d_max * 2, 0.45 * d_max * 2          # meshes a little thinner than the box
         margin = 2 * d_max
         dt = time_step(case)
