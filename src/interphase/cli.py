@@ -215,7 +215,57 @@ def _cmd_run_case(args) -> int:
 
 # ---- campaigns: run, status, crosscheck --------------------------------------------------------
 def _add_campaign(sub) -> None:
-    pass
+    p = sub.add_parser("run", help="run a campaign (skips finished cases; resumable; local pool or SLURM)")
+    p.add_argument("campaign", help="campaign file (TOML)")
+    p.add_argument("--engine", default=None, help="run with this engine instead of the file's: liggghts | yade")
+    p.add_argument("--executor", default=None, choices=("local", "slurm"),
+                   help="where cases run (default: the file's [execution].executor)")
+    p.add_argument("--jobs", type=int, default=None, help="local: cases at a time (default: the file's, else one per core); "
+                   "slurm: array tasks at a time")
+    p.add_argument("--rerun-failed", action="store_true", help="run failed and SLURM-killed cases again")
+    p.add_argument("--dry-run", action="store_true", help="list what would run and render the decks; run nothing")
+    p.add_argument("--output", default=None, help="output folder (default: the file's [campaign].output, else runs/NAME)")
+    p.add_argument("--plain", action="store_true", help="plain progress lines even on a terminal")
+    p.set_defaults(func=_cmd_campaign_run)
+
+    p = sub.add_parser("status", help="state of every case of a campaign, with failure causes")
+    p.add_argument("campaign", help="campaign file (TOML)")
+    p.add_argument("--engine", default=None, help="the engine the campaign ran with, if not the file's")
+    p.add_argument("--output", default=None, help="output folder (default: as in `campaign run`)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_campaign_status)
+
+
+def _cmd_campaign_run(args) -> int:
+    from interphase.campaign.run import run_campaign
+
+    report = run_campaign(args.campaign, engine=args.engine, executor=args.executor, jobs=args.jobs,
+                          rerun_failed=args.rerun_failed, dry_run=args.dry_run, output=args.output,
+                          live=False if args.plain else None)
+    return 0 if args.dry_run else report.exit_code
+
+
+def _cmd_campaign_status(args) -> int:
+    from interphase.campaign.run import campaign_status
+
+    campaign, planned, df = campaign_status(args.campaign, output=args.output, engine=args.engine)
+    counts = df["status"].value_counts().to_dict()
+    if args.json:
+        _print_json({"campaign": campaign.name, "output": str(campaign.output), "counts": counts,
+                     "cases": df.astype(object).where(df.notna(), None).to_dict(orient="records")})
+        return 0
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
+    for col in ("case_id", "engine", "group", "label", "status", "cause", "message"):
+        table.add_column(col, overflow="fold")
+    for r in df.itertuples():
+        msg = "" if not isinstance(r.message, str) else r.message[:80]
+        table.add_row(r.case_id, r.engine, str(r.group), r.label, r.status,
+                      r.cause if isinstance(r.cause, str) else "", msg)
+    Console().print(table)
+    return 0
 
 
 # ---- engine cross-check: crosscheck -----------------------------------------------------------

@@ -1,0 +1,339 @@
+"""Executors: where cases run. One interface, the same case runner (`runner.run_case`) in both.
+
+    executor.run(tasks, on_event)     tasks: list[Task]; on_event(kind, case_id, info)
+        kind "started"  — a case began (info: {"pid"} or {"slurm_job"})
+        kind "finished" — a case ended (info: run_case's status dict)
+    Interruption (KeyboardInterrupt / runner.Interrupted in the caller) stops running cases, records
+    them as interrupted in their folders, reports them finished, and re-raises.
+
+`local`: a pool of worker processes (concurrent.futures, spawn), `jobs` at a time; each case runs its
+engine as a subprocess. `slurm`: submitit job arrays, one per time-limit bucket, at most
+`max_concurrent` tasks running per array, requeued on preemption (submitit + sbatch --requeue); a
+case SLURM kills is recorded with the cause SLURM gives (timeout, cancel, node failure, memory).
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import os
+import signal
+import subprocess
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from interphase.campaign import store as st
+from interphase.campaign.runner import Interrupted, run_case
+from interphase.case import Case
+
+OnEvent = Callable[[str, str, dict], None]
+
+
+@dataclass(frozen=True)
+class Task:
+    case: Case
+    engine: str
+    folder: Path
+    meta: dict
+
+    @property
+    def case_id(self) -> str:
+        return self.meta["case_id"]
+
+
+def interrupted_result(case_id: str, message: str = "interrupted") -> dict:
+    return {"case_id": case_id, "status": "interrupted", "skipped": False, "cause": "interrupted",
+            "message": message, "elapsed": None}
+
+
+def record_interrupted(folder: Path, message: str) -> None:
+    """Mark an unfinished case folder as interrupted (never touches a DONE or recorded failure)."""
+    folder = Path(folder)
+    if folder_terminal(folder):
+        return
+    if (folder / st.CASE_JSON).exists():
+        now = time.time()
+        st.write_json_atomic(folder / st.FAILURE_JSON, {"status": "interrupted", "cause": "interrupted",
+                                                        "message": message, "finished": now, "log_tail": ""})
+
+
+def folder_terminal(folder: Path) -> bool:
+    return st.folder_status(folder) in ("done", "failed", "killed", "interrupted")
+
+
+# ---- local ----------------------------------------------------------------------------------
+_EVENTS = None
+
+
+def _worker_init(events) -> None:
+    global _EVENTS
+    _EVENTS = events
+    # an idle worker ignores Ctrl-C; a running case turns it into a recorded interruption
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _raise_interrupted(signum, frame):
+    # one interruption per case: further signals would cut the recording of this one short
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    raise Interrupted(signal.Signals(signum).name)
+
+
+def _local_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
+    _EVENTS.put(("started", meta["case_id"], {"pid": os.getpid()}))
+    signal.signal(signal.SIGINT, _raise_interrupted)
+    signal.signal(signal.SIGTERM, _raise_interrupted)
+    try:
+        return run_case(case, engine, folder, meta)
+    except (Interrupted, KeyboardInterrupt, SystemExit) as exc:
+        return interrupted_result(meta["case_id"], f"stopped: {getattr(exc, 'reason', type(exc).__name__)}")
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+class LocalExecutor:
+    name = "local"
+
+    def __init__(self, jobs: int = 0):
+        self.jobs = jobs if jobs and jobs > 0 else (os.cpu_count() or 1)
+
+    def run(self, tasks: list[Task], on_event: OnEvent, grace: float = 30.0) -> None:
+        if not tasks:
+            return
+        ctx = mp.get_context("spawn")   # no fork of a process that runs a display thread
+        events = ctx.Queue()
+        workers: dict[str, int] = {}
+        with ProcessPoolExecutor(max_workers=min(self.jobs, len(tasks)), mp_context=ctx,
+                                 initializer=_worker_init, initargs=(events,)) as pool:
+            futures = {pool.submit(_local_task, t.case, t.engine, str(t.folder), t.meta): t for t in tasks}
+            pending = set(futures)
+
+            def drain():
+                while True:
+                    try:
+                        kind, cid, info = events.get_nowait()
+                    except Exception:   # queue.Empty (and a closed queue at shutdown)
+                        return
+                    workers[cid] = info.get("pid")
+                    on_event(kind, cid, info)
+
+            def finish(fut):
+                t = futures[fut]
+                try:
+                    res = fut.result()
+                except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
+                    if folder_terminal(t.folder):
+                        res = {"case_id": t.case_id, "status": st.folder_status(t.folder)}
+                    else:
+                        res = {"case_id": t.case_id, "status": "interrupted", "cause": "worker_died",
+                               "message": f"{type(exc).__name__}: {exc}"}
+                        record_interrupted(t.folder, res["message"])
+                workers.pop(t.case_id, None)
+                on_event("finished", t.case_id, res)
+
+            try:
+                while pending:
+                    done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                    drain()
+                    for fut in done:
+                        finish(fut)
+            except (KeyboardInterrupt, Interrupted):
+                for fut in pending:
+                    fut.cancel()
+                drain()
+                for cid, pid in list(workers.items()):
+                    try:
+                        os.kill(pid, signal.SIGINT)
+                    except (ProcessLookupError, TypeError):
+                        pass
+                running = {f for f in pending if not f.cancelled()}
+                deadline = time.monotonic() + grace
+                while running and time.monotonic() < deadline:
+                    done, running = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
+                    drain()
+                    for fut in done:
+                        finish(fut)
+                for fut in running:   # did not stop within the grace period
+                    t = futures[fut]
+                    record_interrupted(t.folder, "stopped: did not end within the grace period")
+                    on_event("finished", t.case_id, interrupted_result(t.case_id))
+                for fut in pending:
+                    if fut.cancelled():
+                        on_event("finished", futures[fut].case_id, {"case_id": futures[fut].case_id,
+                                                                     "status": "pending", "skipped": True})
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise
+
+
+# ---- slurm ----------------------------------------------------------------------------------
+#: SLURM job states → (case status, cause) for jobs that ended without the runner's own verdict
+SLURM_DEATH = {
+    "TIMEOUT": ("killed", "slurm_timeout"),
+    "CANCELLED": ("killed", "slurm_cancelled"),
+    "NODE_FAIL": ("killed", "slurm_node_fail"),
+    "OUT_OF_MEMORY": ("killed", "slurm_out_of_memory"),
+    "BOOT_FAIL": ("killed", "slurm_boot_fail"),
+    "DEADLINE": ("killed", "slurm_deadline"),
+    "PREEMPTED": ("interrupted", "slurm_preempted"),
+    "FAILED": ("failed", "slurm_job_failed"),
+    "COMPLETED": ("failed", "slurm_no_result"),
+}
+ACTIVE_STATES = ("PENDING", "RUNNING", "REQUEUED", "RESIZING", "SUSPENDED", "CONFIGURING", "COMPLETING",
+                 "REQUEUE_HOLD", "REQUEUE_FED", "SIGNALING", "STAGE_OUT")
+
+
+def _slurm_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
+    """Body of one SLURM array task: the same runner as the local pool."""
+    return run_case(case, engine, folder, meta)
+
+
+def signal_delay(limit_minutes: int) -> int:
+    """Seconds before the time limit at which SLURM warns the job (submitit's USR2): 10 % of the limit,
+    10–90 s, so that a short job is not told it timed out as soon as it starts."""
+    return int(min(90, max(10, 0.1 * limit_minutes * 60)))
+
+
+class SlurmExecutor:
+    name = "slurm"
+
+    def __init__(self, root: Path, *, partition: str | None = None, max_concurrent: int = 16,
+                 time_limit: Callable[[Case], int], job_name: str = "interphase", poll: float = 1.0):
+        self.root = Path(root)
+        self.partition = partition
+        self.max_concurrent = max_concurrent
+        self.time_limit = time_limit
+        self.job_name = job_name
+        self.poll = poll
+        self.jobs_file = self.root / ".submitit" / "jobs.json"
+
+    # submitted job ids survive a killed `campaign run`: a rerun adopts the jobs still alive
+    def _load_jobs(self) -> dict:
+        try:
+            return json.loads(self.jobs_file.read_text())
+        except (OSError, ValueError):
+            return {}
+
+    def _save_jobs(self, jobs: dict) -> None:
+        self.jobs_file.parent.mkdir(parents=True, exist_ok=True)
+        st.write_json_atomic(self.jobs_file, jobs)
+
+    @staticmethod
+    def _squeue_states(job_ids) -> dict[str, str]:
+        ids = sorted({j.split("_")[0] for j in job_ids})
+        if not ids:
+            return {}
+        out = subprocess.run(["squeue", "--states=all", "--noheader", "--array", "--format=%i|%T",
+                              "--jobs", ",".join(ids)], capture_output=True, text=True)
+        states = {}
+        for line in out.stdout.splitlines():
+            jid, _, state = line.partition("|")
+            states[jid.strip()] = state.strip()
+        return states
+
+    def run(self, tasks: list[Task], on_event: OnEvent) -> None:
+        if not tasks:
+            return
+        import submitit
+        from submitit.core.utils import UncompletedJobError
+
+        subfolder = self.root / ".submitit"
+        known = self._load_jobs()
+        alive = self._squeue_states([known[t.case_id] for t in tasks if t.case_id in known])
+        active: dict[str, tuple] = {}      # case id → (job, task)
+        to_submit = []
+        for t in tasks:
+            jid = known.get(t.case_id)
+            if jid and alive.get(jid) in ACTIVE_STATES:
+                active[t.case_id] = (submitit.SlurmJob(folder=subfolder / "%j", job_id=jid), t)
+            else:
+                to_submit.append(t)
+        buckets: dict[int, list[Task]] = {}
+        for t in to_submit:
+            buckets.setdefault(self.time_limit(t.case), []).append(t)
+        ex = submitit.SlurmExecutor(folder=subfolder / "%j")
+        for minutes, bucket in sorted(buckets.items()):
+            params = dict(time=minutes, array_parallelism=self.max_concurrent, cpus_per_task=1, ntasks_per_node=1,
+                          job_name=self.job_name, signal_delay_s=signal_delay(minutes),
+                          additional_parameters={"requeue": True})
+            if self.partition:
+                params["partition"] = self.partition
+            ex.update_parameters(**params)
+            with ex.batch():
+                jobs = [ex.submit(_slurm_task, t.case, t.engine, str(t.folder), t.meta) for t in bucket]
+            for job, t in zip(jobs, bucket):
+                active[t.case_id] = (job, t)
+                known[t.case_id] = job.job_id
+            self._save_jobs(known)
+        announced: set[str] = set()
+        try:
+            while active:
+                time.sleep(self.poll)
+                states = self._squeue_states([job.job_id for job, _ in active.values()])
+                for cid, (job, t) in list(active.items()):
+                    state = states.get(job.job_id, "")
+                    if state == "RUNNING" and cid not in announced:
+                        announced.add(cid)
+                        on_event("started", cid, {"slurm_job": job.job_id})
+                    if job.paths.result_pickle.exists() or (state and state not in ACTIVE_STATES):
+                        on_event("finished", cid, self._collect(job, t, state, UncompletedJobError))
+                        del active[cid]
+        except (KeyboardInterrupt, Interrupted):
+            for cid, (job, t) in active.items():
+                try:
+                    job.cancel(check=False)
+                except Exception:   # noqa: BLE001 — best effort; the job dies with its time limit anyway
+                    pass
+            for cid, (job, t) in active.items():
+                record_interrupted(t.folder, f"stopped: SLURM job {job.job_id} cancelled by the user")
+                on_event("finished", cid, interrupted_result(cid, f"SLURM job {job.job_id} cancelled"))
+            raise
+
+    def _collect(self, job, task: Task, state: str, uncompleted) -> dict:
+        """The case's verdict: the runner's (from the folder) if it gave one, else SLURM's cause of death."""
+        cid = task.case_id
+        result = None
+        try:
+            result = job.result()
+        except Exception as exc:  # noqa: BLE001 — FailedJobError, UncompletedJobError: decided below
+            error = exc
+        else:
+            error = None
+        fs = st.folder_status(task.folder)
+        if fs in ("done", "failed", "killed", "interrupted"):
+            if isinstance(result, dict) and result.get("status") == fs:
+                return result | {"slurm_job": job.job_id}
+            fail = st.read_json(task.folder / st.FAILURE_JSON) or {}
+            return {"case_id": cid, "status": fs, "cause": fail.get("cause"), "message": fail.get("message"),
+                    "elapsed": fail.get("elapsed"), "slurm_job": job.job_id}
+        # the job died before the runner could say anything: SLURM killed it (or it never started)
+        base_state = state.split()[0] if state else ""
+        if not base_state:
+            try:
+                base_state = job.watcher.get_state(job.job_id, mode="force").split()[0]
+            except Exception:  # noqa: BLE001
+                base_state = "UNKNOWN"
+        status, cause = SLURM_DEATH.get(base_state, ("killed", f"slurm_{base_state.lower()}"))
+        tail = ""
+        try:
+            tail = "\n".join((job.stderr() or "").splitlines()[-30:])
+        except Exception:  # noqa: BLE001
+            pass
+        message = f"SLURM job {job.job_id} ended in state {base_state}"
+        if error is not None:
+            message += f": {str(error).splitlines()[0][:300]}"
+        task.folder.mkdir(parents=True, exist_ok=True)
+        if not (task.folder / st.CASE_JSON).exists():
+            st.write_json_atomic(task.folder / st.CASE_JSON, {**task.meta, "inputs": task.case.canonical(),
+                                                             "started": None})
+        now = time.time()
+        st.write_json_atomic(task.folder / st.FAILURE_JSON, {"status": status, "cause": cause, "message": message,
+                                                            "log_tail": tail, "slurm_job": job.job_id,
+                                                            "slurm_state": base_state, "finished": now})
+        st.append_attempt(task.folder, {"event": "end", "status": status, "cause": cause, "time": now,
+                                        "slurm_job": job.job_id})
+        return {"case_id": cid, "status": status, "cause": cause, "message": message, "elapsed": None,
+                "slurm_job": job.job_id}

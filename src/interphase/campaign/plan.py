@@ -1,0 +1,148 @@
+"""Plan: the campaign's cases × engines → `PlannedCase`s with stable ids, folders and flat parameters.
+
+A case id is `interphase.case.case_id(case, engine, engine version, template hash)`: the same inputs
+run by the same engine build and templates get the same id on every machine; a new engine version
+or an edited template gives new ids (and so new folders: old results are never overwritten).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from interphase.case import Case, case_id
+from interphase.campaign.schema import Campaign
+from interphase.errors import InputError
+
+
+@dataclass(frozen=True)
+class PlannedCase:
+    """One engine run of the campaign."""
+
+    case_id: str
+    engine: str
+    case: Case
+    group: str
+    role: str                                   # "interface" | "box"
+    label: str
+    values: tuple = ()                          # the swept values that made it
+    pair_id: str | None = None                  # case id of the paired box test (interface cases)
+    index: int = 0                              # position in the plan (stable order)
+    engine_version: str = ""
+    template_hash: str = ""
+    params: dict = field(default_factory=dict, compare=False, hash=False)
+
+    def meta(self, campaign: str = "") -> dict:
+        """What the runner records in case.json besides the inputs (JSON data)."""
+        return {"case_id": self.case_id, "engine": self.engine, "group": self.group, "role": self.role,
+                "label": self.label, "pair_id": self.pair_id, "campaign": campaign,
+                "values": {k: _jsonable(v) for k, v in self.values}, "params": self.params,
+                "engine_version": self.engine_version, "template_hash": self.template_hash}
+
+
+def _jsonable(v):
+    if isinstance(v, tuple):
+        if all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in v):
+            return {k: _jsonable(x) for k, x in v}
+        return [_jsonable(x) for x in v]
+    return v
+
+
+@functools.lru_cache(maxsize=None)
+def engine_identity(name: str) -> tuple[str, str]:
+    """(version, template hash) of an engine, once per process (`liggghts -h` costs ~0.1 s)."""
+    from interphase.engines.base import get_engine
+
+    eng = get_engine(name)
+    return eng.version(), eng.template_hash()
+
+
+def flat_params(case: Case) -> dict:
+    """The Case's canonical parameters as one flat row of JSON scalars (report columns)."""
+    out: dict = {}
+    for key, value in case.canonical().items():
+        if key == "profile":
+            continue
+        if key == "gradation":
+            out["gradation"] = value if isinstance(value, str) else "user"
+            continue
+        out[key] = value
+    prof = case.profile
+    out["profile_kind"] = prof.kind if prof else None
+    for p in ("rt", "sw", "sr", "au", "ar", "rtmax", "seed"):
+        out[f"profile_{p}" if p == "seed" else p] = None
+    if prof is not None:
+        for k, v in prof.params:
+            out[f"profile_{k}" if k == "seed" else k] = float(v)
+    out["profile_path"] = prof.path if prof is not None and prof.kind == "file" else None
+    out["profile_sha256"] = prof.sha256 if prof is not None and prof.kind == "file" else None
+    out["profile_label"] = prof.label() if prof is not None else None
+    return out
+
+
+def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
+         identity=engine_identity) -> list[PlannedCase]:
+    """Every (case, engine) of the campaign, box tests first (E needs them), in a stable order.
+
+    `engines` overrides the campaign's engine list (`campaign run --engine`). `identity(name)` gives
+    (version, template hash); benchmarks may pass a constant one."""
+    names = tuple(engines) if engines else campaign.engines
+    from interphase.campaign.schema import ENGINES
+
+    for n in names:
+        if n not in ENGINES:
+            raise InputError(f"unknown engine {n!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
+    out: list[PlannedCase] = []
+    order = sorted(range(len(campaign.cases)), key=lambda i: (campaign.cases[i].role != "box", i))
+    for name in names:
+        version, thash = identity(name)
+        ids = {i: case_id(c.case, name, version, thash) for i, c in enumerate(campaign.cases)}
+        for i in order:
+            c = campaign.cases[i]
+            params = flat_params(c.case)
+            out.append(PlannedCase(
+                case_id=ids[i], engine=name, case=c.case, group=c.group, role=c.role, label=c.case.label(),
+                values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
+                engine_version=version, template_hash=thash, params=params))
+    return out
+
+
+def estimate_grains(case: Case) -> int:
+    """Grains in the quasi-2D box: area × 0.8 packing / disk area of D50 (or n_grains if given)."""
+    if case.n_grains:
+        return case.n_grains
+    area = case.box_length_d50 * case.box_height_d50
+    return max(2, int(area * 0.8 / (math.pi / 4)))
+
+
+def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
+    """Rough engine run time [s]: particle-steps / throughput (ENGINES.md: 1.5–4e6 steps/s on one core).
+
+    Steps: consolidation (0.02 s) + shear (distance / velocity), dt = 0.2 Rayleigh time of the smallest
+    grain. Used for SLURM time limits; the engine's own timeout is separate."""
+    from interphase.material import rayleigh_time
+
+    dt = 0.2 * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus, case.poisson)
+    steps = (0.02 + case.shear_distance / case.shear_velocity) / dt
+    return steps * estimate_grains(case) / throughput
+
+
+#: SLURM time limits are rounded up to one of these (minutes), so that a campaign makes few arrays
+TIME_BUCKETS = (1, 2, 5, 10, 15, 30, 60, 120, 240, 480, 720, 1440, 2880)
+
+
+def time_limit_minutes(case: Case, factor: float = 3.0, fixed: float | None = None) -> int:
+    """Time limit of a case on SLURM [min]: `fixed`, else factor × estimate + 2 min, bucketed."""
+    if fixed is not None:
+        return max(1, int(math.ceil(fixed)))
+    need = factor * estimate_seconds(case) / 60.0 + 2.0
+    for b in TIME_BUCKETS:
+        if need <= b:
+            return b
+    return int(math.ceil(need))
+
+
+def case_folder(root: Path, planned: PlannedCase) -> Path:
+    return Path(root) / planned.case_id

@@ -1,0 +1,133 @@
+"""Progress display of a campaign run: a live rich table on a terminal, plain lines otherwise.
+
+Per case: state (queued, running, done, failed, killed, interrupted), elapsed time; overall: counts
+and an ETA = remaining cases × mean duration of the cases finished in this run / parallel slots.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+
+def _fmt_s(seconds: float | None) -> str:
+    if seconds is None or seconds != seconds:
+        return "—"
+    seconds = int(round(seconds))
+    h, rem = divmod(seconds, 3600)
+    m, s = divmod(rem, 60)
+    return f"{h}h{m:02d}m" if h else (f"{m}m{s:02d}s" if m else f"{s}s")
+
+
+class Progress:
+    """Receives executor events; `live` (rich) if the stream is a terminal, else one line per event."""
+
+    STYLE = {"queued": "dim", "running": "cyan", "done": "green", "failed": "red", "killed": "magenta",
+             "interrupted": "yellow", "pending": "dim"}
+
+    def __init__(self, items, slots: int, stream=None, live: bool | None = None, title: str = ""):
+        self.stream = stream or sys.stdout
+        self.items = {p.case_id: p for p in items}
+        self.state = {cid: "queued" for cid in self.items}
+        self.t0: dict[str, float] = {}
+        self.elapsed: dict[str, float] = {}
+        self.cause: dict[str, str] = {}
+        self.slots = max(1, slots)
+        self.title = title
+        self.started = time.monotonic()
+        self.live = self.stream.isatty() if live is None else live
+        self._live = None
+
+    # ---- numbers ---------------------------------------------------------------------------
+    def counts(self) -> dict[str, int]:
+        out: dict[str, int] = {}
+        for s in self.state.values():
+            out[s] = out.get(s, 0) + 1
+        return out
+
+    def eta(self) -> float | None:
+        durations = [v for v in self.elapsed.values() if v]
+        left = sum(1 for s in self.state.values() if s in ("queued", "running"))
+        if not left:
+            return 0.0
+        if not durations:
+            return None
+        mean = sum(durations) / len(durations)
+        running_left = sum(max(0.0, mean - (time.monotonic() - self.t0[c]))
+                           for c, s in self.state.items() if s == "running" and c in self.t0)
+        queued = sum(1 for s in self.state.values() if s == "queued")
+        return (running_left + queued * mean) / self.slots
+
+    def headline(self) -> str:
+        c = self.counts()
+        parts = [f"{c.get(k, 0)} {k}" for k in ("done", "running", "queued", "failed", "killed", "interrupted")
+                 if c.get(k)]
+        return (f"{self.title} {sum(c.values())} cases: " + ", ".join(parts)
+                + f" | elapsed {_fmt_s(time.monotonic() - self.started)}, ETA {_fmt_s(self.eta())}")
+
+    # ---- events ----------------------------------------------------------------------------
+    def __enter__(self):
+        if self.live:
+            from rich.console import Console
+            from rich.live import Live
+
+            self._live = Live(self._table(), console=Console(file=self.stream), refresh_per_second=4,
+                              get_renderable=self._table)
+            self._live.__enter__()
+        else:
+            self._line(f"{self.title} {len(self.items)} cases to run, {self.slots} at a time")
+        return self
+
+    def __exit__(self, *exc):
+        if self._live is not None:
+            self._live.__exit__(*exc)
+            self._live = None
+        self._line(self.headline())
+
+    def _line(self, text: str) -> None:
+        print(text, file=self.stream, flush=True)
+
+    def event(self, kind: str, case_id: str, info: dict) -> None:
+        p = self.items.get(case_id)
+        label = p.label if p else ""
+        if kind == "started":
+            self.state[case_id] = "running"
+            self.t0[case_id] = time.monotonic()
+            if not self.live:
+                where = f"job {info['slurm_job']}" if info.get("slurm_job") else f"pid {info.get('pid')}"
+                self._line(f"  start  {case_id}  {label}  ({where})")
+        elif kind == "finished":
+            status = info.get("status", "failed")
+            self.state[case_id] = status if status != "pending" else "queued"
+            if status == "pending":
+                return
+            el = info.get("elapsed")
+            if el is None and case_id in self.t0:
+                el = time.monotonic() - self.t0[case_id]
+            if status == "done":
+                self.elapsed[case_id] = el or 0.0
+            if info.get("cause"):
+                self.cause[case_id] = info["cause"]
+            if not self.live:
+                c = self.counts()
+                n = sum(c.get(k, 0) for k in ("done", "failed", "killed", "interrupted"))
+                extra = f" [{info.get('cause')}] {str(info.get('message') or '')[:120]}" if status != "done" else ""
+                self._line(f"  {status:<11} {case_id}  {label}  {_fmt_s(el)}  ({n}/{len(self.items)}, "
+                           f"ETA {_fmt_s(self.eta())}){extra}")
+
+    def _table(self):
+        from rich.table import Table
+
+        t = Table(title=self.headline(), expand=False)
+        for col in ("case", "label", "state", "time", "cause"):
+            t.add_column(col)
+        order = {"running": 0, "failed": 1, "killed": 1, "interrupted": 1, "queued": 2, "done": 3}
+        shown = sorted(self.items, key=lambda c: (order.get(self.state[c], 4), self.items[c].index))[:30]
+        for cid in shown:
+            s = self.state[cid]
+            el = (time.monotonic() - self.t0[cid]) if s == "running" and cid in self.t0 else self.elapsed.get(cid)
+            t.add_row(cid, self.items[cid].label, f"[{self.STYLE.get(s, '')}]{s}[/]", _fmt_s(el),
+                      self.cause.get(cid, ""))
+        if len(self.items) > len(shown):
+            t.caption = f"… {len(self.items) - len(shown)} more"
+        return t

@@ -1,0 +1,182 @@
+"""`campaign run` and `campaign status`: plan, lock, skip what is finished, execute, index.
+
+    run_campaign("campaigns/group1.toml", executor="slurm")   → RunReport (counts; exit code)
+
+The campaign lock (filelock) makes a second `campaign run` of the same campaign stop with a clear
+message. Finished cases (DONE) are never rerun; failed and SLURM-killed ones only with
+`rerun_failed`; interrupted and incomplete ones always (they never finished).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from interphase.campaign import store as st
+from interphase.campaign.executors import LocalExecutor, SlurmExecutor, Task
+from interphase.campaign.plan import PlannedCase, plan, time_limit_minutes
+from interphase.campaign.progress import Progress
+from interphase.campaign.runner import Interrupted
+from interphase.campaign.schema import EXECUTORS, Campaign, load_campaign
+from interphase.errors import InputError
+
+
+@dataclass
+class RunReport:
+    campaign: str
+    output: Path
+    planned: int = 0
+    skipped_done: int = 0
+    skipped_failed: int = 0
+    ran: int = 0
+    statuses: dict = field(default_factory=dict)      # case id → status of this run
+    interrupted: bool = False
+
+    def count(self, status: str) -> int:
+        return sum(1 for s in self.statuses.values() if s == status)
+
+    @property
+    def exit_code(self) -> int:
+        """0: every case of the campaign is finished; 1: some failed or were killed; 130: interrupted."""
+        if self.interrupted:
+            return 130
+        return 0 if all(s == "done" for s in self.statuses.values()) and not self.skipped_failed else 1
+
+
+def _select(planned: list[PlannedCase], store: st.CampaignStore, rerun_failed: bool):
+    run, done, failed = [], [], []
+    for p in planned:
+        fs = st.folder_status(store.case_folder(p.case_id))
+        if fs == "done":
+            done.append(p)
+        elif fs in st.FAILED_STATUSES and not rerun_failed:
+            failed.append(p)
+        else:
+            run.append(p)
+    return run, done, failed
+
+
+def _slots(campaign: Campaign, executor: str, jobs: int | None) -> int:
+    if executor == "local":
+        n = jobs if jobs is not None else campaign.execution.jobs
+        return n if n and n > 0 else (os.cpu_count() or 1)
+    return campaign.execution.max_concurrent
+
+
+def run_campaign(path, *, engine: str | None = None, executor: str | None = None, jobs: int | None = None,
+                 rerun_failed: bool = False, dry_run: bool = False, output=None, stream=None,
+                 live: bool | None = None) -> RunReport:
+    stream = stream or sys.stdout
+    campaign = load_campaign(path, output=output)
+    executor = executor or campaign.execution.executor
+    if executor not in EXECUTORS:
+        raise InputError(f"unknown executor {executor!r}", where="--executor", fix=f"use one of {', '.join(EXECUTORS)}")
+    if jobs is not None and jobs < 0:
+        raise InputError(f"must be ≥ 0 (0 = one per core), got {jobs}", where="--jobs")
+    planned = plan(campaign, [engine] if engine else None)
+    report = RunReport(campaign.name, campaign.output, planned=len(planned))
+    if dry_run:
+        return _dry_run(campaign, planned, executor, stream, report)
+
+    store = st.CampaignStore(campaign.output, create=True)
+    with store, store.lock("campaign run"):
+        store.register(planned)
+        store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
+        todo, done, failed = _select(planned, store, rerun_failed)
+        report.skipped_done, report.skipped_failed = len(done), len(failed)
+        for p in done:
+            report.statuses[p.case_id] = "done"
+        for p in failed:
+            report.statuses[p.case_id] = st.folder_status(store.case_folder(p.case_id))
+        print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
+              f"{len(failed)} failed (kept; --rerun-failed reruns them), {len(todo)} to run "
+              f"[{executor}] → {campaign.output}", file=stream, flush=True)
+        if not todo:
+            return report
+        tasks = [Task(p.case, p.engine, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
+        for p in todo:
+            store.set_status(p.case_id, "queued")
+        slots = _slots(campaign, executor, jobs)
+        if executor == "local":
+            ex = LocalExecutor(slots)
+        else:
+            ex = SlurmExecutor(campaign.output, partition=campaign.execution.partition, max_concurrent=slots,
+                               job_name=f"interphase-{campaign.name}",
+                               time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
+                                                                          campaign.execution.time_limit))
+        progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name)
+
+        def on_event(kind: str, cid: str, info: dict) -> None:
+            if kind == "started":
+                store.set_status(cid, "running", slurm_job=info.get("slurm_job"), started=time.time())
+            elif kind == "finished":
+                row = store.record_result(cid)
+                report.statuses[cid] = row.get("status", info.get("status"))
+                if info.get("status") != "pending":
+                    report.ran += 1
+            progress.event(kind, cid, info)
+
+        # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C
+        old = signal.signal(signal.SIGTERM, _sigterm)
+        try:
+            with progress:
+                ex.run(tasks, on_event)
+        except (KeyboardInterrupt, Interrupted):
+            report.interrupted = True
+            print(f"campaign {campaign.name}: interrupted; running cases were stopped and recorded, "
+                  "finished ones are kept. Run the same command again to go on.", file=stream, flush=True)
+        finally:
+            signal.signal(signal.SIGTERM, old)
+            store.reconcile([p.case_id for p in todo], stale_running=True)
+        for p in todo:
+            report.statuses.setdefault(p.case_id, st.folder_status(store.case_folder(p.case_id)))
+    return report
+
+
+def _sigterm(signum, frame):
+    raise Interrupted("SIGTERM")
+
+
+def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport) -> RunReport:
+    """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs)."""
+    from interphase.engines.base import get_engine
+
+    root = campaign.output / ".dry-run"
+    engines = {}
+    print(f"campaign {campaign.name} (dry run, {executor}): {len(planned)} cases → {campaign.output}", file=stream)
+    for p in planned:
+        folder = campaign.output / p.case_id
+        state = st.folder_status(folder) if folder.exists() else "pending"
+        action = "skip (done)" if state == "done" else ("skip (failed)" if state in st.FAILED_STATUSES else "run")
+        eng = engines.setdefault(p.engine, get_engine(p.engine))
+        files = eng.write_input(p.case, root / p.case_id)
+        limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)
+        print(f"  {action:<13} {p.case_id}  {p.engine:<8} {p.group:<8} {p.label}  "
+              f"[{len(files)} files; slurm limit {limit} min]", file=stream)
+        report.statuses[p.case_id] = state
+    print(f"decks rendered in {root}", file=stream, flush=True)
+    return report
+
+
+def campaign_status(path, *, output=None, engine: str | None = None):
+    """(Campaign, planned cases, status DataFrame of the planned cases; pending where never run)."""
+    import pandas as pd
+
+    campaign = load_campaign(path, output=output)
+    planned = plan(campaign, [engine] if engine else None)
+    cols = ["case_id", "engine", "group", "label", "role", "status", "cause", "message", "elapsed", "attempts",
+            "slurm_job"]
+    if not campaign.output.is_dir():
+        df = pd.DataFrame([{"case_id": p.case_id, "engine": p.engine, "group": p.group, "label": p.label,
+                            "role": p.role, "status": "pending"} for p in planned], columns=cols)
+        return campaign, planned, df
+    with st.CampaignStore(campaign.output) as store:
+        store.register(planned)
+        df = store.status()
+    ids = [p.case_id for p in planned]
+    df = df.set_index("case_id").reindex(ids).reset_index()
+    return campaign, planned, df[[c for c in cols if c in df.columns]]

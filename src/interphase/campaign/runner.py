@@ -1,0 +1,232 @@
+"""The case runner: one Case, one engine, one folder → a finished case (DONE) or a recorded failure.
+
+`run_case(case, engine_name, folder, meta)` is what both executors call (in a pool worker or in a
+SLURM job), and what `campaign crosscheck` reuses. It never raises for an engine failure: the
+failure goes to failure.json (cause, message, log tail) and the returned status dict. It re-raises
+interruptions (Ctrl-C, SIGTERM, SLURM time-out signals) after recording them, so the caller stops.
+
+Order of writes (a case killed at any point is never taken for finished):
+  case.json (inputs + provenance) → engine inputs → engine run → contacts/history/particles.parquet
+  → summary.json → case.json (end time) → DONE (atomic rename, last).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import shutil
+import signal
+import socket
+import sys
+import time
+import traceback
+from pathlib import Path
+
+from interphase import __version__
+from interphase.campaign import store as st
+from interphase.case import Case
+
+
+class Interrupted(BaseException):
+    """Raised by executors' signal handlers (SIGTERM, SIGINT) to stop a running case cleanly."""
+
+    def __init__(self, reason: str = "interrupted"):
+        super().__init__(reason)
+        self.reason = reason
+
+
+def _slurm_job() -> str | None:
+    if "SLURM_ARRAY_JOB_ID" in os.environ:
+        return f"{os.environ['SLURM_ARRAY_JOB_ID']}_{os.environ.get('SLURM_ARRAY_TASK_ID', '')}"
+    return os.environ.get("SLURM_JOB_ID")
+
+
+def stale_engine_pids(folder: Path) -> list[int]:
+    """PIDs of this user's processes whose working directory is `folder`: engines orphaned by a run
+    that was killed hard (engines run with cwd = the case folder and in their own session, so a
+    SIGKILL of the campaign's process group does not reach them). Linux /proc; [] elsewhere."""
+    target = os.path.realpath(folder)
+    me, uid = os.getpid(), os.getuid()
+    out = []
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return out
+    for name in entries:
+        if not name.isdigit() or int(name) == me:
+            continue
+        try:
+            if os.stat(f"/proc/{name}").st_uid != uid:
+                continue
+            if os.readlink(f"/proc/{name}/cwd") == target:
+                out.append(int(name))
+        except OSError:
+            continue
+    return out
+
+
+def kill_stale_engines(folder: Path, wait: float = 10.0) -> list[int]:
+    """SIGKILL the orphaned engines of `folder` (by PID) and wait until they are gone."""
+    pids = stale_engine_pids(folder)
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    deadline = time.monotonic() + wait
+    while pids and time.monotonic() < deadline:
+        pids = [p for p in pids if os.path.exists(f"/proc/{p}") and _not_zombie(p)]
+        time.sleep(0.05)
+    return pids
+
+
+def _not_zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _clean(folder: Path) -> None:
+    """Remove what an unfinished earlier attempt left (never attempts.jsonl, the run history)."""
+    for p in folder.iterdir():
+        if p.name == st.ATTEMPTS:
+            continue
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p)
+        else:
+            p.unlink()
+
+
+def minimal_summary(case: Case, results) -> dict:
+    """Summary from History alone, used when interphase.analysis.summary is not available.
+
+    peak_stress_ratio = max |surface_fx| / |surface_fz| [-] over the shear (force on the surface;
+    box tests: on the upper half across the shear plane), with the shear displacement there [m].
+    TODO: replaced by interphase.analysis.summary.summarise when it lands."""
+    import numpy as np
+
+    h = results.history
+    fx = np.abs(h["surface_fx"].to_numpy(float))
+    fz = np.abs(h["surface_fz"].to_numpy(float))
+    fn = np.abs(h["normal_force"].to_numpy(float))
+    load = np.where(fz > 0, fz, fn)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(load > 0, fx / load, np.nan)
+    ok = np.isfinite(ratio)
+    i = int(np.nanargmax(np.where(ok, ratio, -np.inf))) if ok.any() else None
+    return {"summary_kind": "minimal",
+            "peak_stress_ratio": float(ratio[i]) if i is not None else float("nan"),
+            "shear_disp_at_peak": float(h["shear_disp"].iloc[i]) if i is not None else float("nan"),
+            "final_stress_ratio": float(ratio[ok][-1]) if ok.any() else float("nan"),
+            "n_history": int(len(h)), "n_contacts_rows": int(len(results.contacts))}
+
+
+def summarise(case: Case, results) -> tuple[dict, object]:
+    """(flat summary row, series DataFrame or None): the analysis package's if importable."""
+    try:
+        from interphase.analysis.summary import summarise as analysis_summarise
+    except ImportError:
+        return minimal_summary(case, results), None
+    summary = analysis_summarise(case, results)
+    return dict(summary.row), getattr(summary, "series", None)
+
+
+def _failure(folder: Path, status: str, cause: str, message: str, started: float, log_tail: str = "",
+             **extra) -> dict:
+    now = time.time()
+    data = {"status": status, "cause": cause, "message": message, "log_tail": log_tail, "started": started,
+            "finished": now, "elapsed": now - started, "host": socket.gethostname(), "slurm_job": _slurm_job(),
+            **extra}
+    st.write_json_atomic(folder / st.FAILURE_JSON, data)
+    st.append_attempt(folder, {"event": "end", "status": status, "cause": cause, "time": now,
+                               "elapsed": now - started})
+    return data
+
+
+def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict | None = None, *,
+             engine=None) -> dict:
+    """Run one case in `folder`; returns {case_id, status, cause, message, elapsed, skipped, ...}.
+
+    Skips a case whose folder already holds DONE. An earlier unfinished attempt's files are removed
+    first (its engines, if still alive, are killed by PID); attempts.jsonl keeps the history."""
+    folder = Path(folder)
+    meta = dict(meta or {})
+    cid = meta.get("case_id", folder.name)
+    if (folder / st.DONE).exists():
+        return {"case_id": cid, "status": "done", "skipped": True, "cause": None, "message": None,
+                "elapsed": 0.0}
+    folder.mkdir(parents=True, exist_ok=True)
+    kill_stale_engines(folder)
+    _clean(folder)
+    started = time.time()
+    stage = "setup"
+    # a first case.json before anything can fail, so that the folder is always indexable
+    st.write_json_atomic(folder / st.CASE_JSON, {**meta, "case_id": cid, "engine": engine_name,
+                                                 "inputs": case.canonical(), "started": started})
+    try:
+        if engine is None:
+            from interphase.engines.base import get_engine
+            engine = get_engine(engine_name)
+        record = {**meta, "case_id": cid, "engine": engine_name, "inputs": case.canonical(), "name": case.name,
+                  "provenance": {"package": "interphase-dem", "package_version": __version__,
+                                 "engine_version": engine.version(), "template_hash": engine.template_hash(),
+                                 "host": socket.gethostname(), "pid": os.getpid(), "python": sys.version.split()[0],
+                                 "platform": platform.platform(), "slurm_job": _slurm_job()},
+                  "host": socket.gethostname(), "slurm_job": _slurm_job(), "started": started, "finished": None}
+        st.write_json_atomic(folder / st.CASE_JSON, record)
+        st.append_attempt(folder, {"event": "start", "time": started, "host": socket.gethostname(),
+                                   "pid": os.getpid(), "slurm_job": _slurm_job()})
+        stage = "write_input"
+        engine.write_input(case, folder)
+        stage = "execute"
+        engine.execute(folder)
+        stage = "read_results"
+        results = engine.read_results(folder)
+        for name in ("contacts", "history", "particles"):
+            df = getattr(results, name, None)
+            if df is not None:
+                df.to_parquet(folder / f"{name}.parquet", index=False)
+        stage = "summarise"
+        row, series = summarise(case, results)
+        if series is not None and hasattr(series, "to_parquet"):
+            series.to_parquet(folder / "series.parquet")
+        st.write_json_atomic(folder / st.SUMMARY_JSON, {"row": row})
+        finished = time.time()
+        record.update(finished=finished, elapsed=finished - started, status="done")
+        st.write_json_atomic(folder / st.CASE_JSON, record)
+        st.append_attempt(folder, {"event": "end", "status": "done", "time": finished,
+                                   "elapsed": finished - started})
+        st.mark_done(folder)   # last of all
+        return {"case_id": cid, "status": "done", "skipped": False, "cause": None, "message": None,
+                "elapsed": finished - started, "summary": row}
+    except (KeyboardInterrupt, Interrupted, SystemExit) as exc:
+        reason = getattr(exc, "reason", None) or type(exc).__name__
+        _failure(folder, "interrupted", "interrupted", f"stopped during {stage}: {reason}", started)
+        raise
+    except Exception as exc:  # noqa: BLE001 — every failure is recorded, the campaign goes on
+        from interphase.engines.base import EngineError
+
+        if type(exc).__name__ == "UncompletedJobError":
+            # submitit's answer to SLURM's time-limit signal: the job is out of time
+            _failure(folder, "killed", "slurm_timeout", f"SLURM time limit reached during {stage}: {exc}", started)
+            raise
+        if isinstance(exc, EngineError):
+            d = exc.to_dict()
+            data = _failure(folder, "failed", d["cause"], d["message"], started, d.get("log_tail") or "",
+                            returncode=d.get("returncode"), command=d.get("command"), stage=stage)
+        else:
+            cause = {"write_input": "input_error", "read_results": "read_error",
+                     "summarise": "analysis_error"}.get(stage, "runner_error")
+            tb = traceback.format_exc(limit=8)
+            data = _failure(folder, "failed", cause, f"{type(exc).__name__} during {stage}: {exc}", started,
+                            st_tail(folder), traceback=tb, stage=stage)
+        return {"case_id": cid, "status": "failed", "skipped": False, "cause": data["cause"],
+                "message": data["message"], "elapsed": data["elapsed"]}
+
+
+def st_tail(folder: Path) -> str:
+    from interphase.engines.base import log_tail
+
+    return log_tail(folder / "engine.log")

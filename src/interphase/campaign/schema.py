@@ -1,0 +1,539 @@
+"""Campaign TOML → validated `Campaign` (a list of Cases with their groups and pairs), before anything runs.
+
+File layout (SI units; [case] keys are the field names of `interphase.case.Case`):
+
+    [campaign]
+    name = "group1"                    # letters, digits, - and _ (folder name)
+    description = "..."
+    engines = ["liggghts"]             # or engine = "liggghts"; `campaign run --engine` overrides
+    output = "runs/group1"             # optional; relative to the campaign file. Default: ./runs/<name>
+
+    [execution]
+    executor = "local"                 # local | slurm
+    jobs = 0                           # local pool size; 0 = number of cores
+    partition = "debug"                # slurm partition (default: the cluster's default)
+    time_limit = "auto"                # minutes per case, or "auto" (from the case size)
+    time_factor = 3.0                  # "auto": limit = factor × estimated run time (+ 2 min)
+    max_concurrent = 16                # slurm array parallelism (cases running at once)
+
+    [case]                             # constants of every case
+    profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}   # D50 units; files: {kind="file", path=...}
+    friction_ps = 0.2
+
+    [sweep]                            # cartesian product of lists (TOML order)
+    friction_ps = [0.05, 0.2, 0.5]
+    gradation = ["mono", "poly"]
+    profile.rt = [0.1, 0.2, 0.5]       # a profile parameter (dotted key)
+    profile = [{kind = "file", path = "profiles/a.csv", units = "um"}, ...]   # or whole profiles
+
+    [zip]                              # lists of one length, taken together (one factor of the product)
+    name = ["A", "B"]
+    profile.au = [1, 2]
+
+    [[group]]                          # optional: several groups in one file, each with its own
+    name = "1"                         # [group.case] overrides, [group.sweep] and [group.zip];
+    [group.sweep]                      # without [[group]] the file is one group named after [campaign]
+    profile.rt = [0.1, 0.2]
+
+    [pairs]                            # paired direct shear box tests, for E = tan δ / tan φ
+    box = true                         # default: true when the campaign has interface cases
+    case = {shear_distance = 0.004}    # overrides for the box tests
+
+Every message names the file, the line of the key, the key, the allowed values and the fix.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import itertools
+import math
+import os
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from interphase.case import Case, canonical_json, case_from_dict
+from interphase.errors import InputError
+
+ENGINES = ("liggghts", "yade")
+EXECUTORS = ("local", "slurm")
+TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs")
+CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output")
+EXECUTION_KEYS = ("executor", "jobs", "partition", "time_limit", "time_factor", "max_concurrent")
+GROUP_KEYS = ("name", "description", "case", "sweep", "zip")
+PAIR_KEYS = ("box", "case")
+CASE_FIELDS = tuple(f for f in Case.__dataclass_fields__)
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+@dataclass(frozen=True)
+class Execution:
+    """How cases run. Times in minutes."""
+
+    executor: str = "local"
+    jobs: int = 0                       # 0: one per core
+    partition: str | None = None
+    time_limit: float | None = None     # minutes per case; None: from the case size
+    time_factor: float = 3.0
+    max_concurrent: int = 16
+
+
+@dataclass(frozen=True)
+class Group:
+    name: str
+    variables: tuple[str, ...]          # swept keys, e.g. ("profile.rt", "friction_ps", "gradation")
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class CampaignCase:
+    """One case of the campaign: the Case, its group, role and the swept values that made it."""
+
+    case: Case
+    group: str
+    role: str                           # "interface" | "box"
+    values: tuple[tuple[str, object], ...] = ()
+    pair: int | None = None             # index (in Campaign.cases) of the paired box case
+
+
+@dataclass(frozen=True)
+class Campaign:
+    name: str
+    path: Path
+    engines: tuple[str, ...]
+    groups: tuple[Group, ...]
+    cases: tuple[CampaignCase, ...]
+    output: Path
+    execution: Execution = field(default_factory=Execution)
+    description: str = ""
+
+    @property
+    def pairs(self) -> list[tuple[int, int]]:
+        """(interface case index, box case index) for every interface case with a paired box test."""
+        return [(i, c.pair) for i, c in enumerate(self.cases) if c.pair is not None]
+
+
+# ---- locating keys in the TOML text ---------------------------------------------------------
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_KEYLINE = re.compile(r"^\s*((?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*'))*)\s*=")
+
+
+def _split_key(text: str) -> tuple[str, ...]:
+    parts = re.findall(r"\"[^\"]*\"|'[^']*'|[A-Za-z0-9_-]+", text)
+    return tuple(p.strip("\"'") for p in parts)
+
+
+class Locator:
+    """Line numbers of TOML keys by path, e.g. ("group", 0, "sweep", "profile", "rt") (array index as int).
+
+    tomllib keeps no positions, so this scans the text: table headers, array-of-table counters and
+    `key =` lines. Inline tables resolve to the line of their key (the best a person can use)."""
+
+    def __init__(self, text: str):
+        self.lines: dict[tuple, int] = {}
+        table: tuple = ()
+        counts: dict[tuple, int] = {}
+        for no, line in enumerate(text.splitlines(), start=1):
+            m = _HEADER.match(line)
+            if m and not _KEYLINE.match(line):
+                parts = _split_key(m.group(2))
+                if m.group(1) == "[[":
+                    counts[parts] = counts.get(parts, -1) + 1
+                table = self._with_indices(parts, counts, array=m.group(1) == "[[")
+                self.lines.setdefault(table, no)
+                continue
+            k = _KEYLINE.match(line)
+            if k:
+                self.lines.setdefault(table + _split_key(k.group(1)), no)
+
+    @staticmethod
+    def _with_indices(parts: tuple, counts: dict, array: bool) -> tuple:
+        out: list = []
+        for i in range(len(parts)):
+            out.append(parts[i])
+            prefix = parts[: i + 1]
+            if prefix in counts:
+                out.append(counts[prefix])
+        return tuple(out)
+
+    def line(self, path: tuple) -> int | None:
+        """Line of `path`, or of its longest located prefix (the inline table or table holding it)."""
+        for n in range(len(path), 0, -1):
+            if path[:n] in self.lines:
+                return self.lines[path[:n]]
+        return None
+
+
+def _dotted(path: tuple) -> str:
+    return ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in path).replace(".[", "[")
+
+
+class _Ctx:
+    """Builds located InputErrors for one file."""
+
+    def __init__(self, path: Path, text: str):
+        self.path = path
+        self.loc = Locator(text)
+
+    def error(self, path: tuple, message: str, fix: str | None = None) -> InputError:
+        line = self.loc.line(path)
+        where = f"{self.path}:{line}" if line else str(self.path)
+        if path:
+            where += f": {_dotted(path)}"
+        return InputError(message, where=where, fix=fix)
+
+
+def _did_you_mean(key: str, allowed) -> str:
+    close = difflib.get_close_matches(key, list(allowed), n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    return f"{hint}allowed keys: {', '.join(sorted(allowed))}"
+
+
+def _check_keys(ctx: _Ctx, table: dict, allowed, path: tuple) -> None:
+    for key in table:
+        if key not in allowed:
+            raise ctx.error(path + (key,), f"unknown key {key!r}", _did_you_mean(key, allowed))
+
+
+def _type_name(v) -> str:
+    return {str: "a string", bool: "a boolean", int: "an integer", float: "a number", list: "a list",
+            dict: "a table"}.get(type(v), type(v).__name__)
+
+
+# ---- loading --------------------------------------------------------------------------------
+def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None = None) -> Campaign:
+    """Read and validate a campaign file; every case is built (and validated) here, nothing runs.
+
+    `output` overrides the output folder (else [campaign].output relative to the file, else
+    ./runs/<name> relative to the current directory)."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read the campaign file ({exc.strerror})", where=str(path),
+                         fix="give the path of an existing .toml file") from None
+    text = raw.decode("utf-8", errors="replace")
+    ctx = _Ctx(path, text)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        where = f"{path}:{m.group(1)}" if m else str(path)
+        raise InputError(f"TOML syntax error: {exc}", where=where,
+                         fix="see https://toml.io (strings need quotes, tables [name], lists [a, b])") from None
+    _check_keys(ctx, data, TOP_KEYS, ())
+    for key in ("campaign", "execution", "case", "sweep", "zip", "pairs"):
+        if key in data and not isinstance(data[key], (dict, list) if key == "zip" else dict):
+            raise ctx.error((key,), f"must be a table [{key}], got {_type_name(data[key])}")
+
+    meta = data.get("campaign", {})
+    _check_keys(ctx, meta, CAMPAIGN_KEYS, ("campaign",))
+    name = meta.get("name", path.stem)
+    if not isinstance(name, str) or not NAME_RE.match(name):
+        raise ctx.error(("campaign", "name"), f"campaign name must be a folder-safe string, got {name!r}",
+                        "use letters, digits, '-', '_' and '.'")
+    description = meta.get("description", "")
+    if not isinstance(description, str):
+        raise ctx.error(("campaign", "description"), f"must be a string, got {_type_name(description)}")
+    engines = _engines(ctx, meta)
+    base_dir = path.parent.resolve()
+    if output is not None:
+        out = Path(output)
+    elif "output" in meta:
+        if not isinstance(meta["output"], str) or not meta["output"]:
+            raise ctx.error(("campaign", "output"), "must be a folder path (string)")
+        out = Path(meta["output"])
+        out = out if out.is_absolute() else base_dir / out
+    else:
+        out = Path("runs") / name
+    execution = _execution(ctx, data.get("execution", {}))
+
+    groups_raw = data.get("group")
+    top_case = data.get("case", {})
+    if groups_raw is None:
+        groups_spec = [(name, description, {}, data.get("sweep", {}), data.get("zip", []), ())]
+    else:
+        if not isinstance(groups_raw, list) or not all(isinstance(g, dict) for g in groups_raw):
+            raise ctx.error(("group",), "must be an array of tables [[group]]")
+        if not groups_raw:
+            raise ctx.error(("group",), "is empty", "add [[group]] tables or remove the key")
+        groups_spec = []
+        for gi, g in enumerate(groups_raw):
+            gp = ("group", gi)
+            _check_keys(ctx, g, GROUP_KEYS, gp)
+            gname = g.get("name", str(gi + 1))
+            if not isinstance(gname, str) or not NAME_RE.match(gname):
+                raise ctx.error(gp + ("name",), f"group name must be a short string, got {gname!r}")
+            gcase = g.get("case", {})
+            if not isinstance(gcase, dict):
+                raise ctx.error(gp + ("case",), "must be a table of Case fields")
+            # a top-level [sweep]/[zip] applies to every group, before the group's own
+            sweep = {**data.get("sweep", {}), **g.get("sweep", {})}
+            zips = _as_list(data.get("zip", [])) + _as_list(g.get("zip", []))
+            groups_spec.append((gname, g.get("description", ""), gcase, sweep, zips, gp))
+        names = [g[0] for g in groups_spec]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
+
+    _check_case_keys(ctx, top_case, ("case",))
+    cases: list[CampaignCase] = []
+    groups: list[Group] = []
+    seen: dict[str, tuple] = {}
+    for gname, gdesc, gcase, sweep, zips, gpath in groups_spec:
+        _check_case_keys(ctx, gcase, gpath + ("case",))
+        base = _merge(top_case, gcase)
+        factors, variables = _factors(ctx, sweep, zips, gpath)
+        groups.append(Group(gname, tuple(variables), gdesc if isinstance(gdesc, str) else ""))
+        for combo in itertools.product(*factors) if factors else [()]:
+            values: list[tuple[str, object, tuple]] = [kv for part in combo for kv in part]
+            data_case = copy.deepcopy(base)
+            for key, value, _ in values:
+                _assign(ctx, data_case, key, value, gpath)
+            case = _build_case(ctx, data_case, base_dir, values, gpath)
+            key = canonical_json(case.canonical())
+            if key in seen:
+                prev_g, prev_vals = seen[key]
+                first = values[0][2] if values else gpath + ("case",)
+                shown = ", ".join(f"{k} = {v!r}" for k, v, _ in values) or "(no sweep)"
+                raise ctx.error(first, f"duplicate case: {shown} gives the same case as group {prev_g!r} "
+                                f"with {prev_vals or '(no sweep)'}",
+                                "remove repeated values from the sweep (case identity ignores 'name')")
+            seen[key] = (gname, ", ".join(f"{k} = {v!r}" for k, v, _ in values))
+            role = "interface" if case.test == "interface" else "box"
+            cases.append(CampaignCase(case, gname, role, tuple((k, _freeze(v)) for k, v, _ in values)))
+    cases = _add_pairs(ctx, data.get("pairs", {}), cases, seen)
+    return Campaign(name=name, path=path.resolve(), engines=engines, groups=tuple(groups), cases=tuple(cases),
+                    output=out.resolve() if not out.is_absolute() else out, execution=execution,
+                    description=description)
+
+
+def _as_list(z) -> list:
+    return z if isinstance(z, list) else [z]
+
+
+def _freeze(v):
+    if isinstance(v, dict):
+        return tuple(sorted((k, _freeze(x)) for k, x in v.items()))
+    if isinstance(v, list):
+        return tuple(_freeze(x) for x in v)
+    return v
+
+
+def _merge(a: dict, b: dict) -> dict:
+    out = copy.deepcopy(a)
+    for k, v in b.items():
+        if k == "profile" and isinstance(v, dict) and isinstance(out.get(k), dict) and "kind" not in v:
+            out[k] = {**out[k], **v}        # group overrides some profile parameters only
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def _engines(ctx: _Ctx, meta: dict) -> tuple[str, ...]:
+    if "engine" in meta and "engines" in meta:
+        raise ctx.error(("campaign", "engine"), "give either engine or engines, not both")
+    key = "engines" if "engines" in meta else "engine"
+    value = meta.get(key, ["liggghts"])
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not value or not all(isinstance(v, str) for v in value):
+        raise ctx.error(("campaign", key), f"must be an engine name or a non-empty list of them, got {value!r}",
+                        f"allowed: {', '.join(ENGINES)}")
+    for v in value:
+        if v not in ENGINES:
+            close = difflib.get_close_matches(v, ENGINES, n=1)
+            raise ctx.error(("campaign", key), f"unknown engine {v!r}",
+                            (f"did you mean {close[0]!r}? " if close else "") + f"allowed: {', '.join(ENGINES)}")
+    if len(set(value)) != len(value):
+        raise ctx.error(("campaign", key), "an engine is listed twice")
+    return tuple(value)
+
+
+def _execution(ctx: _Ctx, ex: dict) -> Execution:
+    p = ("execution",)
+    _check_keys(ctx, ex, EXECUTION_KEYS, p)
+    executor = ex.get("executor", "local")
+    if executor not in EXECUTORS:
+        raise ctx.error(p + ("executor",), f"unknown executor {executor!r}", f"allowed: {', '.join(EXECUTORS)}")
+    jobs = ex.get("jobs", 0)
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0:
+        raise ctx.error(p + ("jobs",), f"must be an integer ≥ 0 (0 = one per core), got {jobs!r}")
+    part = ex.get("partition")
+    if part is not None and (not isinstance(part, str) or not NAME_RE.match(part)):
+        raise ctx.error(p + ("partition",), f"must be a SLURM partition name, got {part!r}")
+    tl = ex.get("time_limit", "auto")
+    if tl == "auto":
+        tl = None
+    elif isinstance(tl, bool) or not isinstance(tl, (int, float)) or not math.isfinite(tl) or tl <= 0:
+        raise ctx.error(p + ("time_limit",), f"must be minutes > 0 or \"auto\", got {tl!r}")
+    tf = ex.get("time_factor", 3.0)
+    if isinstance(tf, bool) or not isinstance(tf, (int, float)) or not math.isfinite(tf) or tf < 1:
+        raise ctx.error(p + ("time_factor",), f"must be a number ≥ 1, got {tf!r}")
+    mc = ex.get("max_concurrent", 16)
+    if isinstance(mc, bool) or not isinstance(mc, int) or mc < 1:
+        raise ctx.error(p + ("max_concurrent",), f"must be an integer ≥ 1, got {mc!r}")
+    return Execution(executor, jobs, part, None if tl is None else float(tl), float(tf), mc)
+
+
+def _check_case_keys(ctx: _Ctx, table: dict, path: tuple) -> None:
+    for key in table:
+        if key not in CASE_FIELDS:
+            raise ctx.error(path + (key,), f"unknown case field {key!r}", _did_you_mean(key, CASE_FIELDS))
+
+
+def _flatten_sweep(table: dict, prefix: tuple = ()) -> list[tuple[tuple, object]]:
+    """[sweep] entries as (key path, list); `profile.rt = [...]` arrives as {"profile": {"rt": [...]}}."""
+    out = []
+    for k, v in table.items():
+        if isinstance(v, dict):
+            out.extend(_flatten_sweep(v, prefix + (k,)))
+        else:
+            out.append((prefix + (k,), v))
+    return out
+
+
+def _check_var(ctx: _Ctx, key: tuple, where: tuple) -> str:
+    name = ".".join(key)
+    if key[0] not in CASE_FIELDS:
+        raise ctx.error(where, f"unknown case field {key[0]!r}", _did_you_mean(key[0], CASE_FIELDS))
+    if len(key) > 1 and key[0] != "profile" or len(key) > 2:
+        raise ctx.error(where, f"{name!r} cannot be swept by parts", "only profile parameters take dotted keys "
+                        "(profile.rt, profile.sw, profile.sr, profile.au, profile.ar, profile.rtmax, profile.seed, "
+                        "profile.path)")
+    return name
+
+
+def _factors(ctx: _Ctx, sweep: dict, zips: list, gpath: tuple):
+    """The product's factors: each a list of choices, a choice = [(key, value, toml path), ...]."""
+    factors, variables = [], []
+    sp = gpath + ("sweep",) if gpath else ("sweep",)
+    if not isinstance(sweep, dict):
+        raise ctx.error(sp, "must be a table of lists")
+    for key, values in _flatten_sweep(sweep):
+        where = sp + key
+        name = _check_var(ctx, key, where)
+        if not isinstance(values, list):
+            raise ctx.error(where, f"a sweep needs a list of values, got {_type_name(values)}",
+                            f"write {name} = [{values!r}] or move it to [case]")
+        if not values:
+            raise ctx.error(where, "empty sweep: no value to run", "give at least one value, or remove the key")
+        factors.append([[(name, v, where)] for v in values])
+        variables.append(name)
+    for zi, z in enumerate(zips):
+        zp = (gpath + ("zip",) if gpath else ("zip",))
+        if not isinstance(z, dict):
+            raise ctx.error(zp, "must be a table of equal-length lists")
+        entries = _flatten_sweep(z)
+        if not entries:
+            continue
+        lengths = {}
+        for key, values in entries:
+            where = zp + key
+            name = _check_var(ctx, key, where)
+            if not isinstance(values, list) or not values:
+                raise ctx.error(where, "a zip needs a non-empty list of values", f"write {name} = [v1, v2, ...]")
+            lengths[name] = (len(values), where)
+        ns = {n for n, _ in lengths.values()}
+        if len(ns) > 1:
+            (k1, (n1, _)), (k2, (n2, w2)) = sorted(lengths.items(), key=lambda kv: kv[1][0])[:1] + \
+                sorted(lengths.items(), key=lambda kv: -kv[1][0])[:1]
+            raise ctx.error(w2, f"zipped lists differ in length: {k2} has {n2} values, {k1} has {n1}",
+                            "lists in one [zip] are taken together and need one length")
+        n = ns.pop()
+        factors.append([[(".".join(k), v[i], zp + k) for k, v in entries] for i in range(n)])
+        variables.extend(".".join(k) for k, _ in entries)
+    return factors, variables
+
+
+def _assign(ctx: _Ctx, data: dict, key: str, value, gpath: tuple) -> None:
+    if "." in key:
+        field_, param = key.split(".", 1)
+        prof = data.get(field_)
+        if not isinstance(prof, dict):
+            raise ctx.error((gpath + ("case",) if gpath else ("case",)) + ("profile",),
+                            f"sweeping {key!r} needs a profile table in [case]",
+                            "e.g. profile = {kind = \"sawtooth\", rt = 1, sw = 2, sr = 0}")
+        data[field_] = {**prof, param: value}
+    else:
+        data[key] = value
+
+
+_FIELD_IN_MSG = re.compile(r"\bcase\.([a-z_0-9]+)(?:\.([a-z_0-9]+))?")
+_UNKNOWN_IN_MSG = re.compile(r"unknown (?:key|parameter) '([^']+)'")
+
+
+def _build_case(ctx: _Ctx, data: dict, base_dir: Path, values, gpath: tuple) -> Case:
+    """case_from_dict, with its message re-anchored at the TOML line that supplied the bad field."""
+    try:
+        return case_from_dict(data, where="case", base_dir=base_dir)
+    except InputError as exc:
+        msg = str(exc)
+        m = _FIELD_IN_MSG.search(msg)
+        field_ = m.group(1) if m else None
+        sub = m.group(2) if m else None
+        u = _UNKNOWN_IN_MSG.search(msg)
+        if field_ == "profile" and u and not sub:
+            sub = u.group(1)
+        # the swept value that set this field, else the constant tables
+        path = None
+        for key, _, where in values:
+            if field_ and (key == field_ or key == f"{field_}.{sub}" or key.startswith(f"{field_}.")):
+                path = where
+                break
+        if path is None and field_:
+            for tbl in ((gpath + ("case",)) if gpath else None, ("case",)):
+                if tbl and ctx.loc.line(tbl + (field_,)) and (tbl + (field_,)) in ctx.loc.lines:
+                    path = tbl + (field_,) + ((sub,) if sub else ())
+                    break
+        if path is None:
+            path = ("case",) + ((field_,) if field_ else ())
+        shown = ", ".join(f"{k} = {v!r}" for k, v, _ in values)
+        detail = msg.split(": ", 1)[1] if msg.startswith("case") and ": " in msg else msg
+        text = detail + (f" (in the case with {shown})" if shown else "")
+        raise ctx.error(path, text, None) from None
+
+
+def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) -> list[CampaignCase]:
+    """One direct shear box case per distinct soil (every Case field but the surface), for E.
+
+    The box case keeps the soil, stiffness, stress, speed and seed of the interface case; its walls
+    (both halves) take the particle–boundary friction friction_pw, so friction_ps := friction_pw
+    (the study's box has no rough surface). [pairs].case overrides box-only settings."""
+    _check_keys(ctx, pairs, PAIR_KEYS, ("pairs",))
+    want = pairs.get("box", any(c.role == "interface" for c in cases))
+    if not isinstance(want, bool):
+        raise ctx.error(("pairs", "box"), f"must be true or false, got {want!r}")
+    overrides = pairs.get("case", {})
+    if not isinstance(overrides, dict):
+        raise ctx.error(("pairs", "case"), "must be a table of Case fields")
+    _check_case_keys(ctx, overrides, ("pairs", "case"))
+    for bad in ("test", "profile", "friction_ps"):
+        if bad in overrides:
+            raise ctx.error(("pairs", "case", bad), f"{bad} of a paired box test is set by the campaign",
+                            "remove it (box tests have no surface)")
+    if not want:
+        return cases
+    out = list(cases)
+    index: dict[str, int] = {}
+    for i, c in enumerate(cases):
+        if c.role == "box":
+            index.setdefault(canonical_json(c.case.canonical()), i)
+    for i, c in enumerate(cases):
+        if c.role != "interface":
+            continue
+        data = {k: v for k, v in c.case.canonical().items() if k not in ("profile", "test", "friction_ps")}
+        data.update(test="box", friction_ps=c.case.friction_pw, **overrides)
+        data = {k: v for k, v in data.items() if v is not None}
+        try:
+            box = case_from_dict(data, where="pairs.case")
+        except InputError as exc:
+            raise ctx.error(("pairs", "case"), str(exc).split(": ", 1)[-1]) from None
+        key = canonical_json(box.canonical())
+        if key not in index:
+            index[key] = len(out)
+            out.append(CampaignCase(box, "box", "box", (("pair_of", c.group),)))
+        out[i] = CampaignCase(c.case, c.group, c.role, c.values, index[key])
+    return out
