@@ -124,8 +124,10 @@ class Liggghts(Engine):
         g = self.geometry(case)
         dt = g["dt"]
         # type pairs (1 grain, 2 surface/lower box, 3 other walls); wall–wall pairs never meet
-        mu = [case.friction_pp, case.friction_ps, case.friction_pw,
-              case.friction_ps, 0.0, 0.0,
+        # the box test has no rough surface: its lower half (type 2) is a boundary like the rest
+        mu_s = case.friction_ps if case.test == "interface" else case.friction_pw
+        mu = [case.friction_pp, mu_s, case.friction_pw,
+              mu_s, 0.0, 0.0,
               case.friction_pw, 0.0, 0.0]
         rr = [case.rolling_friction] * 9
         n_shear = _steps(case.shear_distance / case.shear_velocity, dt)
