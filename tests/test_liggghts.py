@@ -12,6 +12,7 @@ from interphase.errors import InputError
 from interphase.surface.spec import ProfileSpec
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 from tests.conftest import need_binary
+from tests.reader_contract import ReaderContract
 
 pytestmark = pytest.mark.liggghts
 
@@ -88,6 +89,12 @@ def test_tables_follow_the_contract(run):
     assert (ps.fn > 0).all()                   # compression positive
     assert c.snapshot.nunique() == 5           # 2 mm / 0.5 mm + the start of shear
     assert res.particles.id.nunique() == 200
+
+
+class TestLiggghtsReader(ReaderContract):
+    @pytest.fixture(scope="class")
+    def finished(self, run):
+        return run(tiny(friction_ps=0.2))
 
 
 def test_summed_surface_contacts_equal_mesh_force(run):
