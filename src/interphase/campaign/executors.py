@@ -187,14 +187,16 @@ ACTIVE_STATES = ("PENDING", "RUNNING", "REQUEUED", "RESIZING", "SUSPENDED", "CON
 
 
 def _slurm_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
-    """Body of one SLURM array task: the same runner as the local pool."""
-    return run_case(case, engine, folder, meta)
+    """Body of one SLURM array task: the same runner as the local pool.
 
-
-def signal_delay(limit_minutes: int) -> int:
-    """Seconds before the time limit at which SLURM warns the job (submitit's USR2): 10 % of the limit,
-    10–90 s, so that a short job is not told it timed out as soon as it starts."""
-    return int(min(90, max(10, 0.1 * limit_minutes * 60)))
+    SIGTERM (SLURM's time limit, scancel, preemption) becomes a recorded interruption: the engine is
+    killed, failure.json written; the orchestrator then replaces the cause with SLURM's (from the job
+    state: timeout, cancelled, ...). submitit's own handler would ignore SIGTERM."""
+    signal.signal(signal.SIGTERM, _raise_interrupted)
+    try:
+        return run_case(case, engine, folder, meta)
+    except Interrupted as exc:
+        return interrupted_result(meta["case_id"], f"stopped by {exc.reason} (SLURM)")
 
 
 class SlurmExecutor:
@@ -256,9 +258,12 @@ class SlurmExecutor:
             buckets.setdefault(self.time_limit(t.case), []).append(t)
         ex = submitit.SlurmExecutor(folder=subfolder / "%j")
         for minutes, bucket in sorted(buckets.items()):
+            # use_srun=False: the task runs in the batch step itself. Inside an srun step the Debian
+            # LIGGGHTS (OpenMPI) tries to join the step's PMIx and dies ("OPAL ERROR: Unreachable").
+            # Then submitit's USR2 warning reaches no one; SLURM's SIGTERM at the limit does, and
+            # preemption is SLURM's own requeue (--requeue).
             params = dict(time=minutes, array_parallelism=self.max_concurrent, cpus_per_task=1, ntasks_per_node=1,
-                          job_name=self.job_name, signal_delay_s=signal_delay(minutes),
-                          additional_parameters={"requeue": True})
+                          job_name=self.job_name, use_srun=False, additional_parameters={"requeue": True})
             if self.partition:
                 params["partition"] = self.partition
             ex.update_parameters(**params)
@@ -303,14 +308,18 @@ class SlurmExecutor:
         else:
             error = None
         fs = st.folder_status(task.folder)
-        if fs in ("done", "failed", "killed", "interrupted"):
+        base_state = (state.split()[0] if state else "")
+        slurm_killed = base_state in SLURM_DEATH and SLURM_DEATH[base_state][1] not in ("slurm_job_failed",
+                                                                                       "slurm_no_result")
+        if fs in ("done", "failed", "killed", "interrupted") and not (slurm_killed and fs != "done"):
             if isinstance(result, dict) and result.get("status") == fs:
                 return result | {"slurm_job": job.job_id}
             fail = st.read_json(task.folder / st.FAILURE_JSON) or {}
             return {"case_id": cid, "status": fs, "cause": fail.get("cause"), "message": fail.get("message"),
                     "elapsed": fail.get("elapsed"), "slurm_job": job.job_id}
-        # the job died before the runner could say anything: SLURM killed it (or it never started)
-        base_state = state.split()[0] if state else ""
+        # SLURM killed the job (its verdict wins over what the engine said as it died), or the job
+        # died before the runner could say anything
+        runner = st.read_json(task.folder / st.FAILURE_JSON) or {}
         if not base_state:
             try:
                 base_state = job.watcher.get_state(job.job_id, mode="force").split()[0]
@@ -330,9 +339,11 @@ class SlurmExecutor:
             st.write_json_atomic(task.folder / st.CASE_JSON, {**task.meta, "inputs": task.case.canonical(),
                                                              "started": None})
         now = time.time()
-        st.write_json_atomic(task.folder / st.FAILURE_JSON, {"status": status, "cause": cause, "message": message,
-                                                            "log_tail": tail, "slurm_job": job.job_id,
-                                                            "slurm_state": base_state, "finished": now})
+        st.write_json_atomic(task.folder / st.FAILURE_JSON, {
+            "status": status, "cause": cause, "message": message, "slurm_job": job.job_id,
+            "slurm_state": base_state, "finished": now, "started": runner.get("started"),
+            "elapsed": runner.get("elapsed"), "log_tail": runner.get("log_tail") or tail,
+            "runner_cause": runner.get("cause"), "runner_message": runner.get("message")})
         st.append_attempt(task.folder, {"event": "end", "status": status, "cause": cause, "time": now,
                                         "slurm_job": job.job_id})
         return {"case_id": cid, "status": status, "cause": cause, "message": message, "elapsed": None,

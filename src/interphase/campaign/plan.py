@@ -103,10 +103,18 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
             c = campaign.cases[i]
             params = flat_params(c.case)
             out.append(PlannedCase(
-                case_id=ids[i], engine=name, case=c.case, group=c.group, role=c.role, label=c.case.label(),
+                case_id=ids[i], engine=name, case=c.case, group=c.group, role=c.role, label=_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
                 engine_version=version, template_hash=thash, params=params))
     return out
+
+
+def _label(case: Case) -> str:
+    """Case.label(), made unique within a campaign when the case carries a name (Group 4's A–G)."""
+    if not case.name:
+        return case.label()
+    grading = "user" if case.gradation.sizes else case.gradation.name
+    return f"{case.name}-mu{case.friction_ps:g}-{grading}-s{case.seed}"
 
 
 def estimate_grains(case: Case) -> int:

@@ -253,7 +253,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     groups_raw = data.get("group")
     top_case = data.get("case", {})
     if groups_raw is None:
-        groups_spec = [(name, description, {}, data.get("sweep", {}), data.get("zip", []), ())]
+        groups_spec = [(name, description, {}, data.get("sweep", {}), _as_list(data.get("zip", [])), ())]
     else:
         if not isinstance(groups_raw, list) or not all(isinstance(g, dict) for g in groups_raw):
             raise ctx.error(("group",), "must be an array of tables [[group]]")
