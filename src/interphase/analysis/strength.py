@@ -100,8 +100,10 @@ def moving_average(x, y, window: float) -> np.ndarray:
     good = np.isfinite(y)
     cs = np.concatenate([[0.0], np.cumsum(np.where(good, y, 0.0))])
     cn = np.concatenate([[0], np.cumsum(good)])
-    lo = np.searchsorted(x, x - 0.5 * window, side="left")
-    hi = np.searchsorted(x, x + 0.5 * window, side="right")
+    # a hair of slack so that samples exactly window/2 away count on both sides alike
+    eps = 1e-9 * window
+    lo = np.searchsorted(x, x - 0.5 * window - eps, side="left")
+    hi = np.searchsorted(x, x + 0.5 * window + eps, side="right")
     n = cn[hi] - cn[lo]
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(n > 0, (cs[hi] - cs[lo]) / n, np.nan)
@@ -204,7 +206,8 @@ def _select(particles: pd.DataFrame, snapshots) -> pd.DataFrame:
 
 
 def _bins(z: np.ndarray, bin_height: float, z_min: float | None, z_max: float | None):
-    lo = float(np.min(z)) if z_min is None else float(z_min)
+    # default: the lowest grain sits mid-layer, so that regular layers never straddle a bin edge
+    lo = float(np.min(z)) - 0.5 * bin_height if z_min is None else float(z_min)
     hi = float(np.max(z)) if z_max is None else float(z_max)
     nb = max(1, int(math.ceil((hi - lo) / bin_height - 1e-9)))
     b = np.floor((z - lo) / bin_height).astype(np.int64)
