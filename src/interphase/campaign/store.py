@@ -127,7 +127,7 @@ def folder_record(folder: Path) -> dict | None:
            "slurm_job": meta.get("slurm_job"), "params": json.dumps(meta.get("params", {}), sort_keys=True),
            "summary": None, "updated": time.time()}
     try:
-        row["attempts"] = sum(1 for _ in open(folder / ATTEMPTS))
+        row["attempts"] = sum(1 for line in open(folder / ATTEMPTS) if '"event": "start"' in line)
     except OSError:
         row["attempts"] = 0
     if status == "done":

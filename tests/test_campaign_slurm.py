@@ -1,0 +1,121 @@
+"""`campaign run --executor slurm` on a real single-node SLURM (munge + slurmctld + slurmd from Debian).
+
+One small campaign, real LIGGGHTS in every job: two ordinary cases finish; one case the engine
+rejects (a valid Case whose shear modulus is below LIGGGHTS's floor for hard particles: the engine
+fails at run time, honestly); one that loses grains (far too much shear for its tiny box); one case far longer than its 1-minute time limit, which SLURM kills.
+Each must be reported with its own cause; the others finished.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from conftest import need_binary  # noqa: E402
+from slurm_cluster import SlurmCluster  # noqa: E402
+
+pytestmark = [pytest.mark.slurm, pytest.mark.liggghts]
+
+CAMPAIGN = """
+[campaign]
+name = "slurm-test"
+engines = ["liggghts"]
+output = "out"
+
+[execution]
+executor = "slurm"
+time_limit = 1            # minutes: the long case cannot make it
+max_concurrent = 2
+
+[case]
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 50e6
+shear_distance = 0.0005
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 6.0
+
+[pairs]
+box = false
+
+[[group]]
+name = "ok"
+[group.sweep]
+friction_ps = [0.2, 0.5]
+
+[[group]]
+name = "hostile"          # valid Case, but LIGGGHTS refuses Young's modulus < 5 MPa for hard grains
+[group.case]
+shear_modulus = 1e6
+
+[[group]]
+name = "loses_grains"     # 160× the shear of the others: the tiny box loses grains (LIGGGHTS: Lost atoms)
+[group.case]
+shear_distance = 0.08
+
+[[group]]
+name = "long"             # 1000× slower shear: minutes of engine time, far beyond the 1-minute limit
+[group.case]
+shear_velocity = 0.00005
+"""
+
+
+@pytest.fixture(scope="module")
+def slurm(tmp_path_factory):
+    """A real one-node SLURM for this module; fails loudly if the binaries are missing."""
+    need_binary("liggghts")
+    root = tmp_path_factory.mktemp("slurm")
+    with SlurmCluster(root) as cluster:
+        yield cluster
+
+
+def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
+    camp = tmp_path / "slurm.toml"
+    camp.write_text(CAMPAIGN)
+    env = slurm.env()
+    run = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
+                         env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stdout + run.stderr     # some cases did not finish
+    status = subprocess.run([sys.executable, "-m", "interphase.cli", "status", str(camp), "--json"], cwd=tmp_path,
+                            env=env, capture_output=True, text=True, timeout=60)
+    assert status.returncode == 0, status.stderr
+    cases = {c["group"]: [] for c in json.loads(status.stdout)["cases"]}
+    for c in json.loads(status.stdout)["cases"]:
+        cases[c["group"]].append(c)
+    out = tmp_path / "out"
+
+    # the ordinary cases finished, through SLURM (job id recorded in case.json)
+    assert [c["status"] for c in cases["ok"]] == ["done", "done"], run.stdout
+    for c in cases["ok"]:
+        folder = out / c["case_id"]
+        assert (folder / "DONE").exists() and (folder / "history.parquet").exists()
+        assert json.loads((folder / "case.json").read_text())["slurm_job"]
+
+    # the engine failure: recorded by the runner with the engine's cause and log tail
+    (bad,) = cases["hostile"]
+    assert bad["status"] == "failed" and bad["cause"] == "engine_error", bad
+    fail = json.loads((out / bad["case_id"] / "failure.json").read_text())
+    assert "youngsModulus" in fail["log_tail"]
+    assert not (out / bad["case_id"] / "DONE").exists()
+
+    # a hostile-but-valid setting: the engine loses grains; cause from the engine's log
+    (lost,) = cases["loses_grains"]
+    assert lost["status"] == "failed" and lost["cause"] == "lost_atoms", lost
+    assert "Lost atoms" in json.loads((out / lost["case_id"] / "failure.json").read_text())["log_tail"]
+
+    # the time-out: killed by SLURM, cause taken from the job state, not from the dying engine
+    (slow,) = cases["long"]
+    assert slow["status"] == "killed" and slow["cause"] == "slurm_timeout", slow
+    fail = json.loads((out / slow["case_id"] / "failure.json").read_text())
+    assert fail["slurm_state"] == "TIMEOUT"
+    assert not (out / slow["case_id"] / "DONE").exists()
+
+    # a second run skips everything (finished and failed are kept), submitting nothing
+    again = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
+                           env=env, capture_output=True, text=True, timeout=120)
+    assert "0 to run" in again.stdout, again.stdout
