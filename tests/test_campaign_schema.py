@@ -1,0 +1,210 @@
+"""Campaign files: validation before anything runs (ten+ malformed files, exit 2, located messages),
+the study's five groups, sweeps/zips/groups/pairs, and case ids stable across runs and machines."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+import pytest
+
+from interphase.campaign.plan import plan, time_limit_minutes
+from interphase.campaign.schema import load_campaign
+from interphase.case import canonical_json
+from interphase.cli import main
+from interphase.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+BAD = ROOT / "tests" / "data" / "campaigns_bad"
+CAMPAIGNS = ROOT / "campaigns"
+FAKE_ID = ("LIGGGHTS-PUBLIC 3.8.0", "0123456789abcdef")   # (engine version, template hash) for pure plan tests
+
+# file → (line the message must point at, key it must name)
+BAD_FILES = {
+    "syntax_error.toml": (6, "TOML syntax error"),
+    "unknown_key.toml": (6, "frction_ps"),
+    "wrong_type.toml": (6, "normal_stress"),
+    "negative_size.toml": (9, "box_length_d50"),
+    "empty_sweep.toml": (8, "friction_ps"),
+    "missing_profile.toml": (8, "no-such-trace.csv"),
+    "duplicate_case.toml": (8, "duplicate case"),
+    "unknown_executor.toml": (5, "executor"),
+    "zip_mismatch.toml": (8, "profile.au"),
+    "unknown_engine.toml": (3, "engines"),
+    "unknown_section.toml": (7, "sweeps"),
+    "negative_jobs.toml": (5, "jobs"),
+    "bad_profile_param.toml": (8, "height"),
+}
+
+
+def test_every_bad_file_is_listed():
+    assert sorted(p.name for p in BAD.glob("*.toml")) == sorted(BAD_FILES)
+
+
+@pytest.mark.parametrize("name", sorted(BAD_FILES))
+def test_bad_campaign_gives_one_located_message_and_exit_2(name, capsys, tmp_path):
+    line, key = BAD_FILES[name]
+    rc = main(["run", str(BAD / name), "--output", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert len(err.strip().splitlines()) == 1, err          # one message, no traceback
+    assert f"{name}:{line}:" in err, err                    # file and line
+    assert key in err, err                                  # the key (or what is wrong with it)
+    assert not (tmp_path / "out").exists()                  # validated before anything ran
+
+
+def test_allowed_values_and_did_you_mean_are_given():
+    with pytest.raises(InputError, match=r"allowed: local, slurm"):
+        load_campaign(BAD / "unknown_executor.toml")
+    with pytest.raises(InputError, match=r"did you mean 'friction_ps'"):
+        load_campaign(BAD / "unknown_key.toml")
+    with pytest.raises(InputError, match=r"did you mean 'liggghts'"):
+        load_campaign(BAD / "unknown_engine.toml")
+
+
+# ---- the study's groups ---------------------------------------------------------------------
+@pytest.mark.parametrize("group, variable, values", [
+    (1, "rt", [0.1, 0.2, 0.5, 1, 1.2, 1.5, 2, 3, 5]),
+    (2, "sr", [0.2, 0.5, 1, 2, 3, 5, 8, 10]),
+    (3, "sw", [0.2, 0.5, 1, 2, 3, 4, 5, 10]),
+])
+def test_groups_1_to_3_reproduce_table_6_1(group, variable, values):
+    c = load_campaign(CAMPAIGNS / f"group{group}.toml")
+    inter = [x for x in c.cases if x.role == "interface"]
+    assert len(inter) == len(values) * 3 * 2
+    assert sorted({x.case.profile.param(variable) for x in inter}) == sorted(values)
+    const = {"rt": 1.0, "sr": 0.0, "sw": 2.0}
+    for x in inter:
+        for p, v in const.items():
+            if p != variable and not (group == 1 and p == "rt"):
+                assert x.case.profile.param(p) == v
+    assert {x.case.friction_ps for x in inter} == {0.05, 0.2, 0.5}
+    assert {x.case.gradation.name for x in inter} == {"mono", "poly"}
+    assert {(x.case.friction_pp, x.case.friction_pw, x.case.density, x.case.poisson) for x in inter} == \
+        {(0.5, 0.9, 2650.0, 0.3)}
+    # one box test per soil (gradation), shared by every surface and friction
+    boxes = [x for x in c.cases if x.role == "box"]
+    assert len(boxes) == 2 and all(x.pair is not None and c.cases[x.pair].role == "box" for x in inter)
+
+
+def test_group4_reproduces_table_6_2():
+    c = load_campaign(CAMPAIGNS / "group4.toml")
+    exp = {x.case.name: (x.case.profile.param("au"), x.case.profile.param("ar"), x.case.profile.param("rtmax"))
+           for x in c.cases if x.role == "interface"}
+    assert exp == {"A": (1, 1, 2), "B": (2, 1, 2), "C": (2, 0.5, 2), "D": (4, 2, 4), "E": (2, 0.25, 1),
+                   "F": (4, 0.25, 2), "G": (4, 4, 4)}
+    assert sum(x.role == "interface" for x in c.cases) == 7 * 3 * 2
+
+
+def test_group5_reads_profile_files_relative_to_the_campaign(tmp_path):
+    c = load_campaign(CAMPAIGNS / "group5.toml")
+    prof = next(x for x in c.cases if x.role == "interface").case.profile
+    assert prof.kind == "file" and Path(prof.path) == (CAMPAIGNS / "profiles" / "dektak-1.csv").resolve()
+    assert prof.sha256 == hashlib.sha256((CAMPAIGNS / "profiles" / "dektak-1.csv").read_bytes()).hexdigest()
+
+
+def test_groups_zip_and_pairs(tmp_path):
+    f = tmp_path / "c.toml"
+    f.write_text("""
+[campaign]
+name = "mix"
+[case]
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+[sweep]
+seed = [1, 2]
+[[group]]
+name = "tall"
+[group.sweep]
+profile.rt = [1, 2]
+[[group]]
+name = "flat"
+[group.case]
+profile = {kind = "flat"}
+friction_ps = 0.05
+[pairs]
+case = {shear_distance = 0.004}
+""")
+    c = load_campaign(f, output=tmp_path / "o")
+    assert [g.name for g in c.groups] == ["tall", "flat"]
+    assert c.groups[0].variables == ("seed", "profile.rt")
+    inter = [x for x in c.cases if x.role == "interface"]
+    assert len(inter) == 2 * 2 + 2
+    boxes = [x for x in c.cases if x.role == "box"]
+    # one box test per distinct soil (here: per seed), with the override, walls at friction_pw
+    assert sorted(b.case.seed for b in boxes) == [1, 2]
+    assert all(b.case.shear_distance == 0.004 and b.case.friction_ps == b.case.friction_pw for b in boxes)
+    for x in inter:
+        assert c.cases[x.pair].case.seed == x.case.seed
+    assert c.output == tmp_path / "o"
+
+
+# ---- case ids -------------------------------------------------------------------------------
+GOLDEN_TOML = """
+[campaign]
+name = "golden"
+[case]
+test = "interface"
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+d50 = 0.0007
+gradation = "poly"
+friction_pp = 0.5
+friction_ps = 0.5
+friction_pw = 0.9
+rolling_friction = 0.1
+density = 2650.0
+shear_modulus = 1e9
+poisson = 0.3
+restitution = 0.5
+normal_stress = 100e3
+shear_velocity = 0.05
+shear_distance = 0.003
+snapshot_every = 0.00025
+box_length_d50 = 40
+box_height_d50 = 20
+seed = 1
+[pairs]
+box = false
+"""
+GOLDEN_JSON = ('{"box_height_d50":20.0,"box_length_d50":40.0,"d50":0.0007,"density":2650.0,"friction_pp":0.5,'
+               '"friction_ps":0.5,"friction_pw":0.9,"gradation":"poly","n_grains":null,"normal_stress":100000.0,'
+               '"poisson":0.3,"profile":{"kind":"sawtooth","params":{"rt":1.0,"sr":0.0,"sw":2.0}},"restitution":0.5,'
+               '"rolling_friction":0.1,"seed":1,"shear_distance":0.003,"shear_modulus":1000000000.0,'
+               '"shear_velocity":0.05,"snapshot_every":0.00025,"test":"interface"}')
+GOLDEN_ID = "bb28730b280a"
+
+
+def test_case_id_is_golden_and_follows_engine_and_templates(tmp_path):
+    f = tmp_path / "golden.toml"
+    f.write_text(GOLDEN_TOML)
+    c = load_campaign(f)
+    (case,) = [x.case for x in c.cases]
+    # the id is the hash of these exact bytes: the same on every machine
+    assert canonical_json(case.canonical()) == GOLDEN_JSON
+    payload = canonical_json({"case": case.canonical(), "engine": "liggghts", "engine_version": FAKE_ID[0],
+                              "template": FAKE_ID[1]})
+    assert hashlib.sha256(payload.encode()).hexdigest()[:12] == GOLDEN_ID
+    (p,) = plan(c, identity=lambda name: FAKE_ID)
+    assert p.case_id == GOLDEN_ID
+    # a new engine build or an edited template gives new ids (new folders; old results kept)
+    assert plan(c, identity=lambda name: ("LIGGGHTS-PUBLIC 3.8.1", FAKE_ID[1]))[0].case_id != GOLDEN_ID
+    assert plan(c, identity=lambda name: (FAKE_ID[0], "fedcba9876543210"))[0].case_id != GOLDEN_ID
+    # and so does any physical input; a label does not
+    f.write_text(GOLDEN_TOML.replace("seed = 1", "seed = 2"))
+    assert plan(load_campaign(f), identity=lambda name: FAKE_ID)[0].case_id != GOLDEN_ID
+    f.write_text(GOLDEN_TOML.replace("seed = 1", "seed = 1\nname = \"a label\""))
+    assert plan(load_campaign(f), identity=lambda name: FAKE_ID)[0].case_id == GOLDEN_ID
+
+
+def test_real_ids_are_stable_across_loads_and_working_directories(tmp_path, monkeypatch):
+    first = [p.case_id for p in plan(load_campaign(CAMPAIGNS / "group1.toml"))]
+    monkeypatch.chdir(tmp_path)
+    again = [p.case_id for p in plan(load_campaign(CAMPAIGNS / "group1.toml"))]
+    assert first == again and len(set(first)) == len(first) == 56
+
+
+def test_time_limits_grow_with_case_size():
+    c = load_campaign(CAMPAIGNS / "group1.toml")
+    small = c.cases[0].case.replace(box_length_d50=10.0, box_height_d50=5.0, shear_distance=0.001)
+    assert time_limit_minutes(small) < time_limit_minutes(c.cases[0].case)
+    assert time_limit_minutes(c.cases[0].case, fixed=7.5) == 8
