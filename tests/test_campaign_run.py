@@ -1,0 +1,197 @@
+"""`campaign run` locally with the real LIGGGHTS: resumable after SIGKILL, clean Ctrl-C, lock,
+dry run, --rerun-failed, and an index rebuilt from the case folders."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from conftest import need_binary  # noqa: E402
+
+from interphase.campaign.runner import stale_engine_pids  # noqa: E402
+from interphase.campaign.store import CampaignStore, folder_status  # noqa: E402
+from interphase.cli import main  # noqa: E402
+
+pytestmark = pytest.mark.liggghts
+
+# six tiny real cases of a few seconds each (slow shear so that a run can be caught mid-way)
+CAMPAIGN = """
+[campaign]
+name = "resume"
+engines = ["liggghts"]
+output = "out"
+
+[execution]
+jobs = 2
+
+[case]
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 50e6
+shear_velocity = 0.01
+shear_distance = 0.0005
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 6.0
+
+[sweep]
+friction_ps = [0.05, 0.2, 0.5]
+seed = [1, 2]
+
+[pairs]
+box = false
+"""
+
+
+@pytest.fixture
+def campaign(tmp_path):
+    need_binary("liggghts")
+    f = tmp_path / "resume.toml"
+    f.write_text(CAMPAIGN)
+    return f
+
+
+def _start(camp: Path, *args) -> subprocess.Popen:
+    # own process group, like a shell job: the test signals the whole group
+    return subprocess.Popen([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain", *args],
+                            cwd=camp.parent, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True)
+
+
+def _folders(out: Path) -> list[Path]:
+    return [p for p in out.iterdir() if p.is_dir() and (p / "case.json").exists()] if out.exists() else []
+
+
+def _starts(folder: Path) -> int:
+    return sum('"event": "start"' in line for line in (folder / "attempts.jsonl").read_text().splitlines())
+
+
+def _wait_for(cond, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if cond():
+            return
+        time.sleep(0.05)
+    pytest.fail(f"timed out waiting for {what}")
+
+
+def _no_engine_left(out: Path) -> None:
+    for folder in _folders(out):
+        assert stale_engine_pids(folder) == [], f"engine still running in {folder}"
+
+
+def test_sigkill_midway_then_rerun_recomputes_only_unfinished(campaign):
+    out = campaign.parent / "out"
+    proc = _start(campaign)
+    try:
+        def midway():
+            done = [f for f in _folders(out) if (f / "DONE").exists()]
+            running = [f for f in _folders(out) if not (f / "DONE").exists()]
+            return len(done) >= 2 and running
+        _wait_for(midway, 120, "two finished cases and one running")
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)          # the whole process group, no chance to clean up
+        proc.wait()
+    done_before = {f.name: ((f / "DONE").stat().st_mtime_ns, _starts(f)) for f in _folders(out)
+                   if (f / "DONE").exists()}
+    unfinished = [f.name for f in _folders(out) if not (f / "DONE").exists()]
+    assert len(done_before) >= 2 and unfinished
+    # a finished folder is complete; an unfinished one never counts as done
+    for cid in done_before:
+        assert (out / cid / "summary.json").exists() and (out / cid / "history.parquet").exists()
+    for cid in unfinished:
+        assert folder_status(out / cid) == "incomplete"
+    with CampaignStore(out) as store:
+        st = store.status().set_index("case_id")["status"]
+    assert all(st[cid] != "done" for cid in unfinished)
+
+    rerun = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(campaign), "--plain"],
+                           cwd=campaign.parent, capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stdout + rerun.stderr
+    assert f"{len(done_before)} finished" in rerun.stdout
+    for cid, (mtime, starts) in done_before.items():
+        # not recomputed: DONE untouched, no new attempt
+        assert (out / cid / "DONE").stat().st_mtime_ns == mtime
+        assert _starts(out / cid) == starts
+    for cid in unfinished:
+        assert (out / cid / "DONE").exists() and _starts(out / cid) == 2
+    assert len(_folders(out)) == 6 and all((f / "DONE").exists() for f in _folders(out))
+    _no_engine_left(out)
+
+    # the index is a cache: lost, it is rebuilt from the folders
+    (out / "index.sqlite").unlink()
+    for extra in ("index.sqlite-wal", "index.sqlite-shm"):
+        (out / extra).unlink(missing_ok=True)
+    with CampaignStore(out) as store:
+        df = store.summaries()
+    assert len(df) == 6 and set(df["status"]) == {"done"}
+    assert {"case_id", "engine", "group", "label", "friction_ps", "seed", "profile_kind", "rt", "shear_modulus",
+            "peak_stress_ratio"} <= set(df.columns)
+    assert sorted(df["friction_ps"].unique()) == [0.05, 0.2, 0.5]
+    assert df["peak_stress_ratio"].notna().all()
+
+
+def test_ctrl_c_stops_cleanly_and_records_interrupted(campaign):
+    out = campaign.parent / "out"
+    proc = _start(campaign)
+    _wait_for(lambda: any(not (f / "DONE").exists() for f in _folders(out)) and
+              any(stale_engine_pids(f) for f in _folders(out)), 120, "a running engine")
+    os.killpg(proc.pid, signal.SIGINT)               # what a terminal's Ctrl-C does
+    text, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 130, text
+    assert "interrupted" in text
+    interrupted = [f for f in _folders(out) if folder_status(f) == "interrupted"]
+    assert interrupted, text
+    for f in interrupted:
+        assert not (f / "DONE").exists()
+        assert json.loads((f / "failure.json").read_text())["cause"] == "interrupted"
+    assert all(folder_status(f) in ("done", "interrupted") for f in _folders(out))
+    _no_engine_left(out)
+
+
+def test_second_run_is_refused_while_the_first_holds_the_lock(campaign, capsys):
+    out = campaign.parent / "out"
+    with CampaignStore(out, create=True) as store, store.lock():
+        rc = main(["run", str(campaign)])
+    err = capsys.readouterr().err
+    assert rc == 2 and "another `campaign run`" in err and len(err.strip().splitlines()) == 1
+    assert _folders(out) == []
+
+
+def test_dry_run_lists_and_renders_without_running(campaign, capsys):
+    rc = main(["run", str(campaign), "--dry-run"])
+    text = capsys.readouterr().out
+    out = campaign.parent / "out"
+    assert rc == 0 and text.count("  run  ") == 6
+    decks = list((out / ".dry-run").glob("*/in.deck"))
+    assert len(decks) == 6
+    assert _folders(out) == []          # nothing ran, nothing indexed as started
+
+
+def test_failed_cases_are_kept_until_rerun_failed(tmp_path):
+    need_binary("liggghts")
+    f = tmp_path / "hostile.toml"
+    # valid Case, refused by LIGGGHTS at run time (Young's modulus below its hard-particle floor)
+    f.write_text(CAMPAIGN.replace("shear_modulus = 50e6", "shear_modulus = 1e6")
+                 .replace("seed = [1, 2]", "seed = [1]").replace("[0.05, 0.2, 0.5]", "[0.2]"))
+    cmd = [sys.executable, "-m", "interphase.cli", "run", str(f), "--plain"]
+    first = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert first.returncode == 1, first.stdout + first.stderr
+    (folder,) = _folders(tmp_path / "out")
+    fail = json.loads((folder / "failure.json").read_text())
+    assert fail["status"] == "failed" and fail["cause"] == "engine_error" and fail["log_tail"]
+    con = sqlite3.connect(tmp_path / "out" / "index.sqlite")
+    assert con.execute("SELECT status, cause FROM cases").fetchall() == [("failed", "engine_error")]
+    con.close()
+    again = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert again.returncode == 1 and "0 to run" in again.stdout and _starts(folder) == 1
+    forced = subprocess.run(cmd + ["--rerun-failed"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert forced.returncode == 1 and "1 to run" in forced.stdout and _starts(folder) == 2
