@@ -314,7 +314,7 @@ def surface_anisotropy(contacts: pd.DataFrame, snapshots=None, shear_sign: int =
     require_columns(contacts, ("snapshot", "kind", "nx", "nz", "fn", "ft", "fx", "fz"))
     keys = _snapshot_keys(contacts, snapshots)
     c = apply_shear_sign(contacts, shear_sign)
-    c = c[c["kind"].astype(str).to_numpy() == "ps"]
+    c = c[c["kind"].eq("ps").to_numpy()]
     snap = c["snapshot"].to_numpy()
     res = resultant_direction(c["fx"], c["fz"], snap, keys)
     nrm = force_weighted_normals(c["nx"], c["nz"], c["fn"], snap, keys)
@@ -353,7 +353,7 @@ def region_anisotropy(contacts: pd.DataFrame, rect, snapshots=None, shear_sign: 
     c = apply_shear_sign(contacts, shear_sign)
     if shear_sign == -1:
         rect = (-rect[1], -rect[0], rect[2], rect[3])
-    keep = in_rectangle(c["cx"], c["cz"], rect) & np.isin(c["kind"].astype(str).to_numpy(), kinds)
+    keep = in_rectangle(c["cx"], c["cz"], rect) & c["kind"].isin(list(kinds)).to_numpy()
     c = c[keep]
     snap = c["snapshot"].to_numpy()
     fab = tensor_method(c["nx"], c["nz"], c["fn"], c["ft"], group=snap, keys=keys)

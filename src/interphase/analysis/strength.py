@@ -81,7 +81,7 @@ def contact_stress_ratio(contacts: pd.DataFrame) -> pd.Series:
     """μs per snapshot from the 'ps' contacts: ΣFx/Σ(−Fz) with F = −f the force on the surface.
     (Dumped tangential forces of sliding contacts include damping, ENGINES.md: prefer History.)"""
     require_columns(contacts, ("snapshot", "kind", "fx", "fz"))
-    ps = contacts[contacts["kind"].astype(str).to_numpy() == "ps"]
+    ps = contacts[contacts["kind"].eq("ps").to_numpy()]
     sums = ps.groupby("snapshot")[["fx", "fz"]].sum()
     snaps = np.unique(contacts["snapshot"].to_numpy())
     sums = sums.reindex(snaps)

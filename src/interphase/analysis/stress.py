@@ -79,7 +79,7 @@ def average_stress(contacts: pd.DataFrame, rect, snapshots=None, kinds=("pp", "p
     area = (x1r - x0r) * (z1r - z0r) * (1.0 if thickness is None else float(thickness))
     keys = (np.asarray(snapshots) if snapshots is not None
             else np.unique(contacts["snapshot"].to_numpy()))
-    c = contacts[np.isin(contacts["kind"].astype(str).to_numpy(), kinds)]
+    c = contacts[contacts["kind"].isin(list(kinds)).to_numpy()]
     fx, fz = c["fx"].to_numpy(float), c["fz"].to_numpy(float)
     xa, za = c["x1"].to_numpy(float), c["z1"].to_numpy(float)
     lx, lz = c["x2"].to_numpy(float) - xa, c["z2"].to_numpy(float) - za

@@ -196,7 +196,7 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     soil_top = _soil_top(contacts, particles, d50)
     if interface:
         z0 = trace_top(case)
-        ps = contacts[contacts["kind"].astype(str).to_numpy() == "ps"]
+        ps = contacts[contacts["kind"].eq("ps").to_numpy()]
         if len(ps):
             top_pts = float(np.nanmax(ps["cz"].to_numpy(float)))
             if top_pts > z0 - 0.5 * d50 + d50 or top_pts < z0 - 0.5 * d50 - d50:
@@ -287,7 +287,7 @@ def PEAK_WINDOW(d50: float) -> float:
 def _centre_heights(contacts: pd.DataFrame, particles) -> np.ndarray:
     if particles is not None and len(particles):
         return particles["z"].to_numpy(float)
-    pp = contacts[contacts["kind"].astype(str).to_numpy() == "pp"]
+    pp = contacts[contacts["kind"].eq("pp").to_numpy()]
     return np.concatenate([pp["z1"].to_numpy(float), pp["z2"].to_numpy(float), contacts["z2"].to_numpy(float)])
 
 
