@@ -1,4 +1,4 @@
-"""Quasi-static checks: the METHODS.md inertial-number example and real LIGGGHTS output."""
+"""Quasi-static checks on real LIGGGHTS output (the formulas are tested in test_strength.py)."""
 
 import json
 from pathlib import Path
@@ -6,23 +6,11 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from interphase.analysis.quasistatic import checks, inertial_number, max_shear_rate, shear_rate_profile
+from interphase.analysis.quasistatic import checks
 from interphase.case import case_from_dict
 from interphase.engines.base import Results
 
 DATA = Path(__file__).parent / "data" / "liggghts_sawtooth45"
-
-
-def test_inertial_number_example():
-    # v = 1 mm/s over a 10 mm band, D50 1 mm, 100 kPa, 2650 kg/m³ → 1.63e−5
-    assert inertial_number(1e-3 / 10e-3, 1e-3, 100e3, 2650) == pytest.approx(1.63e-5, rel=2e-3)
-
-
-def test_linear_profile_gives_its_slope():
-    z = [i * 1e-3 for i in range(10) for _ in range(5)]
-    parts = pd.DataFrame({"snapshot": 1, "z": z, "vx": [0.01 * (1 - zz / 9e-3) for zz in z]})
-    prof = shear_rate_profile(parts, 1e-3, 0.0, z_ref=-0.5e-3)
-    assert max_shear_rate(prof) == pytest.approx(0.01 / 9e-3, rel=1e-9)
 
 
 def test_checks_on_real_liggghts_output():
