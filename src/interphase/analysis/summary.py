@@ -265,6 +265,12 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     # -- profile quantities
     _profile_features(case, row, reasons)
 
+    # -- quasi-static checks of the run (overlaps, platen-force error, lost grains); I is above
+    from interphase.analysis.quasistatic import checks
+
+    for k, v in checks(case, results).items():
+        row.setdefault(k, v)
+
     # anything NaN without a reason gets one, so that no NaN goes unexplained
     for k, v in list(row.items()):
         if isinstance(v, float) and not math.isfinite(v) and k not in reasons:
