@@ -178,23 +178,29 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
         st.write_json_atomic(folder / st.CASE_JSON, record)
         st.append_attempt(folder, {"event": "start", "time": started, "host": socket.gethostname(),
                                    "pid": os.getpid(), "slurm_job": _slurm_job()})
+        timings = {}   # seconds per stage: where a case's time goes (bench/bench_campaign.py)
         stage = "write_input"
+        t = time.perf_counter()
         engine.write_input(case, folder)
         stage = "execute"
+        timings["write_input"], t = time.perf_counter() - t, time.perf_counter()
         engine.execute(folder)
         stage = "read_results"
+        timings["execute"], t = time.perf_counter() - t, time.perf_counter()
         results = engine.read_results(folder)
         for name in ("contacts", "history", "particles"):
             df = getattr(results, name, None)
             if df is not None:
                 df.to_parquet(folder / f"{name}.parquet", index=False)
         stage = "summarise"
+        timings["read_results"], t = time.perf_counter() - t, time.perf_counter()
         row, series = summarise(case, results)
         if series is not None and hasattr(series, "to_parquet"):
             series.to_parquet(folder / "series.parquet")
         st.write_json_atomic(folder / st.SUMMARY_JSON, {"row": row})
+        timings["summarise"] = time.perf_counter() - t
         finished = time.time()
-        record.update(finished=finished, elapsed=finished - started, status="done")
+        record.update(finished=finished, elapsed=finished - started, status="done", timings=timings)
         st.write_json_atomic(folder / st.CASE_JSON, record)
         st.append_attempt(folder, {"event": "end", "status": "done", "time": finished,
                                    "elapsed": finished - started})

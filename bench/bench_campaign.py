@@ -1,0 +1,169 @@
+"""Campaign machinery costs (results go to BENCHMARKS.md, section "campaign"; never asserted in tests).
+
+1. Planning + index for 10,000 cases: load_campaign (every Case built and validated) + plan (ids with
+   the real LIGGGHTS version and template hash) + CampaignStore.register (SQLite), target < 2 s.
+2. Scheduling overhead per case, local executor, target < 50 ms: a real campaign of tiny LIGGGHTS
+   cases run with one worker; overhead = wall time − Σ (per-case time inside the runner, from
+   case.json). Also reported: the runner's own work around the engine (write_input, read_results,
+   parquet, summary, DONE) with a stand-in Engine whose execute runs `true` — a stand-in is allowed
+   in a benchmark, never in the tests that prove the features.
+
+    .venv/bin/python bench/bench_campaign.py
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from interphase.campaign.plan import engine_identity, plan
+from interphase.campaign.run import run_campaign
+from interphase.campaign.runner import run_case
+from interphase.campaign.schema import load_campaign
+from interphase.campaign.store import CampaignStore
+from interphase.engines.base import Engine, EngineProfile, Results
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS
+
+BIG = """
+[campaign]
+name = "big"
+[case]
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+[sweep]
+profile.rt = [%s]
+friction_ps = [0.05, 0.2, 0.5, 0.8]
+seed = [%s]
+[pairs]
+box = false
+"""
+
+TINY = """
+[campaign]
+name = "tiny"
+engines = ["liggghts"]
+output = "out"
+[execution]
+jobs = 1
+[case]
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 50e6
+shear_distance = 0.0005
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 6.0
+[sweep]
+friction_ps = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5]
+seed = [1, 2]
+[pairs]
+box = false
+"""
+
+
+def bench_planning(tmp: Path) -> dict:
+    f = tmp / "big.toml"
+    rts = ", ".join(f"{0.1 + 0.2 * i:.1f}" for i in range(25))
+    seeds = ", ".join(str(i) for i in range(1, 101))
+    f.write_text(BIG % (rts, seeds))
+    engine_identity("liggghts")          # `liggghts -h` once (0.1 s), outside the timing like any cache
+    t0 = time.perf_counter()
+    camp = load_campaign(f, output=tmp / "big-out")
+    t1 = time.perf_counter()
+    planned = plan(camp)
+    t2 = time.perf_counter()
+    with CampaignStore(camp.output, create=True) as store:
+        store.register(planned)
+        t3 = time.perf_counter()
+        n = len(store.status())
+    t4 = time.perf_counter()
+    return {"cases": len(planned), "load_validate_s": t1 - t0, "plan_ids_s": t2 - t1, "index_register_s": t3 - t2,
+            "total_s": t3 - t0, "status_table_s": t4 - t3, "indexed": n}
+
+
+class StandIn(Engine):
+    """Benchmark-only engine: renders one file, runs `true`, returns small real-shaped tables."""
+
+    name = "standin"
+
+    @classmethod
+    def default_profile(cls):
+        return EngineProfile(binary="true")
+
+    def version(self):
+        return "standin 0"
+
+    def template_hash(self):
+        return "0" * 16
+
+    def render(self, case):
+        return {"in.deck": "# stand-in\n"}
+
+    def execute(self, folder):
+        subprocess.run(["true"], cwd=folder, check=True)
+
+    def read_results(self, folder):
+        hist = pd.DataFrame({c: [0.0, 1e-4, 2e-4] for c in HISTORY_COLUMNS})
+        hist["surface_fx"] = [0.0, 0.1, 0.2]
+        hist["surface_fz"] = [-1.0, -1.0, -1.0]
+        cont = pd.DataFrame({c: [0.0] * 10 for c in CONTACT_COLUMNS})
+        cont["kind"] = "pp"
+        return Results(cont, hist)
+
+
+def bench_runner_standin(tmp: Path, n: int = 200) -> dict:
+    camp = load_campaign(_write(tmp / "tiny.toml", TINY), output=tmp / "standin-out")
+    case = camp.cases[0].case
+    eng = StandIn()
+    t = time.perf_counter()
+    for i in range(n):
+        run_case(case, "standin", tmp / "standin-out" / f"c{i}", {"case_id": f"c{i}"}, engine=eng)
+    return {"cases": n, "per_case_ms": 1e3 * (time.perf_counter() - t) / n}
+
+
+def bench_local_pool(tmp: Path) -> dict:
+    f = _write(tmp / "tiny.toml", TINY)
+    out = tmp / "out"
+    shutil.rmtree(out, ignore_errors=True)
+    with open(tmp / "progress.txt", "w") as sink:
+        t = time.perf_counter()
+        rep = run_campaign(f, stream=sink, live=False)
+        wall = time.perf_counter() - t
+    inside, engine, stages = 0.0, 0.0, {}
+    for p in out.iterdir():
+        if (p / "case.json").exists():
+            meta = json.loads((p / "case.json").read_text())
+            inside += meta["elapsed"]
+            engine += meta["timings"]["execute"]
+            for k, v in meta["timings"].items():
+                stages[k] = stages.get(k, 0.0) + v
+    n = rep.count("done")
+    return {"cases": n, "wall_s": wall, "inside_runner_s": inside, "engine_execute_s": engine,
+            "scheduling_overhead_ms_per_case": 1e3 * (wall - inside) / n,
+            "runner_work_besides_engine_ms_per_case": 1e3 * (inside - engine) / n,
+            "stage_mean_ms": {k: 1e3 * v / n for k, v in stages.items()}}
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def main() -> None:
+    tmp = Path(tempfile.mkdtemp(prefix="bench-campaign-"))
+    try:
+        res = {"planning_10k": bench_planning(tmp), "runner_standin": bench_runner_standin(tmp),
+               "local_pool_liggghts": bench_local_pool(tmp)}
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    json.dump(res, sys.stdout, indent=1)
+    print()
+
+
+if __name__ == "__main__":
+    main()
