@@ -118,22 +118,19 @@ def _label(case: Case) -> str:
 
 
 def estimate_grains(case: Case) -> int:
-    """Grains in the quasi-2D box: area × 0.8 packing / disk area of D50 (or n_grains if given)."""
-    if case.n_grains:
-        return case.n_grains
-    area = case.box_length_d50 * case.box_height_d50
-    return max(2, int(area * 0.8 / (math.pi / 4)))
+    """Grains the engines will place (interphase.engines.packing.grain_count)."""
+    from interphase.engines.packing import grain_count
+
+    return grain_count(case)
 
 
 def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
-    """Rough engine run time [s]: particle-steps / throughput (ENGINES.md: 1.5–4e6 steps/s on one core).
+    """Rough engine run time [s]: particle-steps / throughput (ENGINES.md: 1.5–4e6 steps/s on one core),
+    with the LIGGGHTS deck's own time step and consolidation time. Used for SLURM time limits; the
+    engine's own timeout is separate."""
+    from interphase.engines.liggghts import CONSOLIDATION_TIME, time_step
 
-    Steps: consolidation (0.02 s) + shear (distance / velocity), dt = 0.2 Rayleigh time of the smallest
-    grain. Used for SLURM time limits; the engine's own timeout is separate."""
-    from interphase.material import rayleigh_time
-
-    dt = 0.2 * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus, case.poisson)
-    steps = (0.02 + case.shear_distance / case.shear_velocity) / dt
+    steps = (CONSOLIDATION_TIME + case.shear_distance / case.shear_velocity) / time_step(case)
     return steps * estimate_grains(case) / throughput
 
 
