@@ -1,0 +1,404 @@
+"""Bilinear correlations (METHODS.md §7) and the study's correlation set (Figs 6.3, 6.7–6.10a).
+
+Two models, both continuous at the breakpoint c (same units as x):
+    hinge    y = b0 + b1·x + b2·(x − c)₊        coefficients (b0, b1, b2), slope b1 then b1 + b2
+    plateau  y = b0 + b1·min(x, c)              coefficients (b0, b1), flat beyond c
+
+Fitting: every candidate c with at least MIN_SIDE points strictly on each side; least squares at
+each c (all candidates at once, normal equations batched in numpy); the best grid c is refined by
+scipy.optimize.minimize_scalar (bounded) between its grid neighbours and kept only if it lowers the
+RSS — so data with an exact breakpoint at a data x return that x exactly.
+Breakpoint intervals: (1) profile likelihood — every c with
+RSS(c) ≤ RSSmin·[1 + F0.95(1, n−p)/(n−p)], p = linear coefficients + 1 (c itself); (2) a seeded
+residual bootstrap (refit on fitted + resampled centred residuals; percentile interval), which also
+gives the coefficient intervals.
+Rows are sorted by (x, y) and x is shifted to start at 0 before fitting, so a fit is invariant to row
+order and shifting x shifts c by the same amount.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import optimize, stats
+
+MIN_SIDE = 3          # points on each side of the breakpoint (METHODS.md §7)
+MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
+MODELS = ("hinge", "plateau")
+N_GRID_MAX = 400      # candidate breakpoints evaluated exactly (data x + midpoints, thinned beyond)
+
+
+class FitError(ValueError):
+    """Not enough (distinct, finite) points for a bilinear fit; str() says why."""
+
+
+def _design(u: np.ndarray, c: np.ndarray, model: str) -> np.ndarray:
+    """Design matrices for every c at once: shape (len(c), n, p)."""
+    u = u[None, :]
+    c = np.asarray(c, float)[:, None]
+    one = np.ones_like(u + c)
+    if model == "hinge":
+        return np.stack([one, u + 0 * c, np.maximum(u - c, 0.0)], axis=-1)
+    return np.stack([one, np.minimum(u, c)], axis=-1)
+
+
+def _lstsq_many(u: np.ndarray, y: np.ndarray, c: np.ndarray, model: str) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares at every candidate c for u sorted ascending: (coefficients (C, p), RSS (C,)).
+
+    The normal equations come from prefix/suffix sums of 1, u, u², y, u·y split at each c, so all C
+    candidates cost O(n + C) rather than O(n·C); RSS = yᵀy − βᵀXᵀy (exact RSS of the final c is
+    recomputed directly by the caller)."""
+    c = np.asarray(c, float)
+    k = np.searchsorted(u, c, side="right")          # u[:k] ≤ c < u[k:]
+    z = np.zeros(1)
+    cs = lambda v: np.concatenate([z, np.cumsum(v)])
+    C0, C1, C2, Cy, Cuy = cs(np.ones_like(u)), cs(u), cs(u * u), cs(y), cs(u * y)
+    n, s1, s2, sy, suy = u.size, C1[-1], C2[-1], Cy[-1], Cuy[-1]
+    P0, P1, P2, Py, Puy = C0[k], C1[k], C2[k], Cy[k], Cuy[k]        # prefix (u ≤ c)
+    S0, S1, S2, Sy, Suy = n - P0, s1 - P1, s2 - P2, sy - Py, suy - Puy   # suffix (u > c)
+    if model == "hinge":
+        h1 = S1 - c * S0                       # Σ (u−c)₊
+        h2 = S2 - 2 * c * S1 + c * c * S0      # Σ (u−c)₊²
+        uh = S2 - c * S1                       # Σ u·(u−c)₊
+        yh = Suy - c * Sy                      # Σ y·(u−c)₊
+        XtX = np.stack([np.stack([np.full_like(c, n), np.full_like(c, s1), h1], -1),
+                        np.stack([np.full_like(c, s1), np.full_like(c, s2), uh], -1),
+                        np.stack([h1, uh, h2], -1)], -2)
+        Xty = np.stack([np.full_like(c, sy), np.full_like(c, suy), yh], -1)
+    else:
+        m1 = P1 + c * S0                       # Σ min(u, c)
+        m2 = P2 + c * c * S0                   # Σ min(u, c)²
+        ym = Puy + c * Sy                      # Σ y·min(u, c)
+        XtX = np.stack([np.stack([np.full_like(c, n), m1], -1), np.stack([m1, m2], -1)], -2)
+        Xty = np.stack([np.full_like(c, sy), ym], -1)
+    beta = np.einsum("cij,cj->ci", np.linalg.pinv(XtX), Xty)
+    rss = np.maximum(float(y @ y) - np.einsum("ci,ci->c", beta, Xty), 0.0)
+    return beta, rss
+
+
+def _rss_one(u, y, c, model) -> float:
+    X = _design(u, np.array([c]), model)[0]
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ beta
+    return float(r @ r)
+
+
+def _candidates(u_sorted: np.ndarray) -> np.ndarray:
+    """Admissible breakpoints: data x and midpoints with ≥ MIN_SIDE points strictly on each side."""
+    ux = np.unique(u_sorted)
+    mids = 0.5 * (ux[1:] + ux[:-1])
+    cand = np.unique(np.concatenate([ux, mids]))
+    left = np.searchsorted(u_sorted, cand, side="left")              # points < c
+    right = u_sorted.size - np.searchsorted(u_sorted, cand, side="right")   # points > c
+    cand = cand[(left >= MIN_SIDE) & (right >= MIN_SIDE)]
+    if cand.size > N_GRID_MAX:
+        # thin evenly but keep every data x: exact breakpoints at data points stay reachable
+        keep = np.unique(np.linspace(0, cand.size - 1, N_GRID_MAX).round().astype(int))
+        cand = np.unique(np.concatenate([cand[keep], np.intersect1d(cand, ux)[:: max(1, ux.size // N_GRID_MAX)]]))
+    return cand
+
+
+def _fit_core(u: np.ndarray, y: np.ndarray, model: str, cand: np.ndarray) -> tuple[float, np.ndarray, float, np.ndarray]:
+    """Best c (refined), its coefficients and RSS, and the grid RSS curve."""
+    beta, rss = _lstsq_many(u, y, cand, model)
+    k = int(np.argmin(rss))
+    c_best = float(cand[k])
+    rss_best = _rss_one(u, y, c_best, model)     # exact, not the normal-equation shortcut
+    lo, hi = float(cand[max(k - 1, 0)]), float(cand[min(k + 1, cand.size - 1)])
+    scale = max(float(u[-1] - u[0]), 1e-300)
+    if hi > lo and rss_best > 1e-28 * max(float(y @ y), 1e-300):
+        res = optimize.minimize_scalar(lambda c: _rss_one(u, y, c, model), bounds=(lo, hi), method="bounded",
+                                       options={"xatol": 1e-9 * scale})
+        if res.success and res.fun < rss_best * (1 - 1e-12):
+            c_best, rss_best = float(res.x), float(res.fun)
+    X = _design(u, np.array([c_best]), model)[0]
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    return c_best, beta, rss_best, rss
+
+
+@dataclass(frozen=True)
+class BilinearFit:
+    """A fitted bilinear correlation. x, y and c in the data's units (angles: degrees, ψ unless named)."""
+    model: str                                  # "hinge" | "plateau"
+    coef: tuple[float, ...]                     # (b0, b1, b2) hinge | (b0, b1) plateau, x NOT shifted
+    c: float                                    # breakpoint, x units
+    c_interval_profile: tuple[float, float]     # profile-likelihood interval at `level`
+    c_interval_bootstrap: tuple[float, float]   # residual-bootstrap percentile interval
+    coef_interval: tuple[tuple[float, float], ...]   # bootstrap percentile interval per coefficient
+    r2: float
+    rss: float
+    n: int
+    x_range: tuple[float, float]
+    level: float = 0.95
+    n_boot: int = 0
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def predict(self, x) -> np.ndarray | float:
+        x = np.asarray(x, dtype=float)
+        if self.model == "hinge":
+            b0, b1, b2 = self.coef
+            out = b0 + b1 * x + b2 * np.maximum(x - self.c, 0.0)
+        else:
+            b0, b1 = self.coef
+            out = b0 + b1 * np.minimum(x, self.c)
+        return float(out) if out.ndim == 0 else out
+
+    def predict_interval(self, x) -> tuple[float, float]:
+        """Percentile band of the bootstrap refits at x (scalar)."""
+        boots = self.extra.get("boot_params")
+        if boots is None or len(boots) == 0:
+            return (math.nan, math.nan)
+        vals = np.array([_predict_params(self.model, p, float(x)) for p in boots])
+        a = (1 - self.level) / 2
+        return (float(np.quantile(vals, a)), float(np.quantile(vals, 1 - a)))
+
+    def equation(self, x: str = "x", digits: int = 3) -> str:
+        f = lambda v: f"{v:.{digits}g}"
+        if self.model == "hinge":
+            b0, b1, b2 = self.coef
+            return f"y = {f(b0)} + {f(b1)}·{x} + {f(b2)}·({x} − {f(self.c)})₊"
+        b0, b1 = self.coef
+        return f"y = {f(b0)} + {f(b1)}·min({x}, {f(self.c)})"
+
+    def to_dict(self) -> dict:
+        d = {"model": self.model, "c": self.c, "c_lo_profile": self.c_interval_profile[0],
+             "c_hi_profile": self.c_interval_profile[1], "c_lo_boot": self.c_interval_bootstrap[0],
+             "c_hi_boot": self.c_interval_bootstrap[1], "r2": self.r2, "rss": self.rss, "n": self.n,
+             "x_min": self.x_range[0], "x_max": self.x_range[1], "level": self.level, "n_boot": self.n_boot}
+        for i, (b, (lo, hi)) in enumerate(zip(self.coef, self.coef_interval)):
+            d[f"b{i}"], d[f"b{i}_lo"], d[f"b{i}_hi"] = b, lo, hi
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "BilinearFit":
+        p = 3 if d["model"] == "hinge" else 2
+        return cls(model=d["model"], coef=tuple(float(d[f"b{i}"]) for i in range(p)), c=float(d["c"]),
+                   c_interval_profile=(float(d["c_lo_profile"]), float(d["c_hi_profile"])),
+                   c_interval_bootstrap=(float(d["c_lo_boot"]), float(d["c_hi_boot"])),
+                   coef_interval=tuple((float(d[f"b{i}_lo"]), float(d[f"b{i}_hi"])) for i in range(p)),
+                   r2=float(d["r2"]), rss=float(d["rss"]), n=int(d["n"]),
+                   x_range=(float(d["x_min"]), float(d["x_max"])), level=float(d.get("level", 0.95)),
+                   n_boot=int(d.get("n_boot", 0)))
+
+
+def _predict_params(model: str, params: np.ndarray, x: float) -> float:
+    if model == "hinge":
+        b0, b1, b2, c = params
+        return b0 + b1 * x + b2 * max(x - c, 0.0)
+    b0, b1, c = params
+    return b0 + b1 * min(x, c)
+
+
+def _unshift(model: str, beta: np.ndarray, c_u: float, x0: float) -> tuple[tuple[float, ...], float]:
+    """Coefficients fitted on u = x − x0 back to x: b0 changes, slopes and (c − x0) do not."""
+    if model == "hinge":
+        b0, b1, b2 = beta
+        return (float(b0 - b1 * x0), float(b1), float(b2)), c_u + x0
+    b0, b1 = beta
+    # b0 + b1·min(u, cu) = b0 + b1·min(x, cu + x0) − b1·x0
+    return (float(b0 - b1 * x0), float(b1)), c_u + x0
+
+
+def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int = 199, seed: int = 0) -> BilinearFit:
+    """Fit `model` to (x, y); NaN rows are dropped. Raises FitError (with the reason) for too few points."""
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    x = np.asarray(x, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    if x.shape != y.shape:
+        raise ValueError("x and y differ in length")
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    n = x.size
+    if n < MIN_POINTS:
+        raise FitError(f"no fit: n = {n} < {MIN_POINTS} points")
+    order = np.lexsort((y, x))           # row-order invariance: one canonical order
+    x, y = x[order], y[order]
+    x0 = float(x[0])
+    u = x - x0                          # shift invariance: fit on x − min(x)
+    cand = _candidates(u)
+    if cand.size == 0:
+        raise FitError(f"no fit: {np.unique(x).size} distinct x values leave no breakpoint with "
+                       f"{MIN_SIDE} points on each side")
+    c_u, beta, rss, grid_rss = _fit_core(u, y, model, cand)
+    p = beta.size + 1
+    dof = n - p
+    tss = float(((y - y.mean()) ** 2).sum())
+    r2 = 1.0 - rss / tss if tss > 0 else math.nan
+    # profile-likelihood interval: evaluate on the grid plus a fine even grid of the admissible range
+    fine = np.unique(np.concatenate([cand, np.linspace(cand[0], cand[-1], 400), [c_u]]))
+    _, fine_rss = _lstsq_many(u, y, fine, model)
+    thresh = rss * (1.0 + stats.f.ppf(level, 1, dof) / dof)
+    inside = fine[fine_rss <= thresh * (1 + 1e-12) + 1e-300]
+    c_prof = (float(inside.min() + x0), float(inside.max() + x0)) if inside.size else (c_u + x0, c_u + x0)
+
+    coef, c = _unshift(model, beta, c_u, x0)
+    boot_params = np.empty((0, p))
+    if n_boot > 0:
+        rng = np.random.default_rng(seed)
+        X = _design(u, np.array([c_u]), model)[0]
+        fitted = X @ beta
+        resid = y - fitted
+        resid = resid - resid.mean()
+        rows = []
+        for _ in range(n_boot):
+            yb = fitted + rng.choice(resid, size=n, replace=True)
+            cb, bb, _, _ = _fit_core(u, yb, model, cand)
+            cf, cc = _unshift(model, bb, cb, x0)
+            rows.append((*cf, cc))
+        boot_params = np.asarray(rows)
+    a = (1 - level) / 2
+    if boot_params.size:
+        q = np.quantile(boot_params, [a, 1 - a], axis=0)
+        coef_iv = tuple((float(q[0, i]), float(q[1, i])) for i in range(p - 1))
+        c_boot = (float(q[0, -1]), float(q[1, -1]))
+    else:
+        coef_iv = tuple((math.nan, math.nan) for _ in range(p - 1))
+        c_boot = (math.nan, math.nan)
+    return BilinearFit(model=model, coef=coef, c=float(c), c_interval_profile=c_prof, c_interval_bootstrap=c_boot,
+                       coef_interval=coef_iv, r2=float(r2), rss=rss, n=int(n),
+                       x_range=(float(x[0]), float(x[-1])), level=level, n_boot=n_boot,
+                       extra={"boot_params": boot_params, "grid_c": cand + x0, "grid_rss": grid_rss})
+
+
+def fit_hinge(x, y, **kw) -> BilinearFit:
+    return fit_bilinear(x, y, "hinge", **kw)
+
+
+def fit_plateau(x, y, **kw) -> BilinearFit:
+    return fit_bilinear(x, y, "plateau", **kw)
+
+
+# ---- the study's correlations --------------------------------------------------------------------
+@dataclass(frozen=True)
+class CorrelationSpec:
+    """One of the study's correlations: y against x over a subset of the interface cases."""
+    key: str            # file-name-safe id, e.g. "fig6_8"
+    figure: str         # "6.8"
+    x: str              # column of the points table (angles: degrees; ψ unless the name says ccw)
+    y: str
+    model: str
+    subset: str         # "all" | "not_flat_spaced" | "flat_spaced"
+    by: str | None      # fit separately per value of this column (None: pooled only)
+    title: str
+    x_label: str
+    y_label: str
+
+
+STUDY: tuple[CorrelationSpec, ...] = (
+    CorrelationSpec("fig6_3a", "6.3a", "theta_n_surface_deg", "peak_stress_ratio", "plateau", "all", None,
+                    "Peak stress ratio at the surface vs θn (surface)", "θn, surface [° from vertical]", "peak stress ratio tan δ [-]"),
+    CorrelationSpec("fig6_3b", "6.3b", "theta_r_surface_deg", "peak_stress_ratio", "plateau", "all", None,
+                    "Peak stress ratio at the surface vs θr (surface)", "θr, surface [° from vertical]", "peak stress ratio tan δ [-]"),
+    CorrelationSpec("fig6_3c", "6.3c", "theta_n_region_deg", "stress_ratio_region", "plateau", "all", None,
+                    "Average stress ratio (sampling region) vs θn (region)", "θn, region [° from vertical]", "average stress ratio q/p region [-]"),
+    CorrelationSpec("fig6_3d", "6.3d", "theta_r_region_deg", "stress_ratio_region", "plateau", "all", None,
+                    "Average stress ratio (sampling region) vs θr (region)", "θr, region [° from vertical]", "average stress ratio q/p region [-]"),
+    CorrelationSpec("fig6_7a", "6.7 (≥ 90°)", "theta_a_deg_90", "peak_stress_ratio", "plateau", "all", "friction_ps",
+                    "Peak stress ratio vs θa, all normals (≥ 90°)", "θa, filter ≥ 90° [° from vertical]", "peak stress ratio tan δ [-]"),
+    CorrelationSpec("fig6_7b", "6.7 (> 92°)", "theta_a_deg_92", "peak_stress_ratio", "plateau", "all", "friction_ps",
+                    "Peak stress ratio vs θa, normals > 92°", "θa, filter > 92° [° from vertical]", "peak stress ratio tan δ [-]"),
+    CorrelationSpec("fig6_8", "6.8", "theta_a_deg_92", "theta_r_surface_deg", "hinge", "not_flat_spaced", "friction_ps",
+                    "θr at the surface vs θa (> 92°), flat-spaced surfaces excluded", "θa, filter > 92° [° from vertical]", "θr, surface [° from vertical]"),
+    CorrelationSpec("fig6_9", "6.9", "theta_a_ccw_deg_90", "theta_r_over_theta_a", "hinge", "flat_spaced", None,
+                    "θr/θa vs θa (≥ 90°, ccw) for flat-spaced surfaces", "θa, filter ≥ 90° [° ccw from +x]", "θr/θa [-] (both ψ)"),
+    CorrelationSpec("fig6_10a", "6.10a", "theta_r_surface_deg", "efficiency", "plateau", "all", None,
+                    "Peak efficiency vs θr at the surface", "θr, surface [° from vertical]", "efficiency E = tan δ / tan φ [-]"),
+)
+SPECS = {s.key: s for s in STUDY}
+
+POINT_COLUMNS = ("case_id", "group", "label", "friction_ps", "gradation", "profile_kind", "flat_spaced",
+                 "tan_phi", "efficiency", "theta_a_ccw_deg_90", "theta_r_over_theta_a", "non_dilative")
+
+
+def _col(df, name, default=math.nan):
+    return df[name] if name in df.columns else pd.Series(default, index=df.index)
+
+
+def prepare_points(summaries: pd.DataFrame) -> pd.DataFrame:
+    """Interface cases of a summaries table (one row per finished case, box rows included) with the
+    derived columns the correlations need:
+      tan_phi      peak stress ratio of the paired box test (via pair_id), NaN without one
+      efficiency   E = tan δ / tan φ
+      flat_spaced  regular triangles with flat spacing Sr > 0 (Group 2)
+      non_dilative θa (> 92°) undefined: such surfaces enter the θa correlations at θa = 0, as the
+                   study plots non-dilative systems (§6.4.6); the ≥ 90° θa likewise
+      theta_a_ccw_deg_90      θa (≥ 90°) counterclockwise from +x (= ψ + 90°), Fig. 6.9's axis
+      theta_r_over_theta_a    θr (surface, ψ) / θa (≥ 90°, ψ)
+    Rows keep group, friction and gradation."""
+    from interphase.analysis.strength import efficiency
+
+    df = summaries
+    test = _col(df, "test", "interface").astype(str)
+    role = _col(df, "role", "interface").astype(str)
+    box = df[(test == "box") | (role == "box")]
+    pts = df[(test == "interface") & (role != "box")].copy()
+    ratio_by_id = pd.Series(pd.to_numeric(_col(box, "peak_stress_ratio"), errors="coerce").to_numpy(),
+                            index=_col(box, "case_id", "").astype(str).to_numpy())
+    ratio_by_id = ratio_by_id[~ratio_by_id.index.duplicated()]
+    pair = _col(pts, "pair_id", None)
+    pts["tan_phi"] = pair.map(ratio_by_id).astype(float) if len(pts) else pd.Series(dtype=float)
+    for c in ("peak_stress_ratio", "theta_a_deg_92", "theta_a_deg_90", "theta_r_surface_deg", "sr", "friction_ps"):
+        pts[c] = pd.to_numeric(_col(pts, c), errors="coerce")
+    pts["efficiency"] = efficiency(pts["peak_stress_ratio"].to_numpy(), pts["tan_phi"].to_numpy()) if len(pts) else []
+    kind = _col(pts, "profile_kind", "").astype(str)
+    pts["flat_spaced"] = (kind == "sawtooth") & (pts["sr"].fillna(0) > 0)
+    pts["non_dilative"] = pts["theta_a_deg_92"].isna() & (kind != "") & (kind != "None")
+    pts.loc[pts["non_dilative"], "theta_a_deg_92"] = 0.0
+    pts.loc[pts["non_dilative"] & pts["theta_a_deg_90"].isna(), "theta_a_deg_90"] = 0.0
+    pts["theta_a_ccw_deg_90"] = pts["theta_a_deg_90"] + 90.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pts["theta_r_over_theta_a"] = np.where(pts["theta_a_deg_90"] > 0,
+                                               pts["theta_r_surface_deg"] / pts["theta_a_deg_90"], np.nan)
+    return pts.reset_index(drop=True)
+
+
+def subset(points: pd.DataFrame, spec: CorrelationSpec) -> pd.DataFrame:
+    if spec.subset == "flat_spaced":
+        return points[points["flat_spaced"]]
+    if spec.subset == "not_flat_spaced":
+        return points[~points["flat_spaced"]]
+    return points
+
+
+@dataclass
+class FitResult:
+    """A fit (or the reason there is none) for one correlation and one slice of the data."""
+    spec: CorrelationSpec
+    slice: str                     # "all" or e.g. "friction_ps=0.2"
+    n: int
+    fit: BilinearFit | None
+    reason: str = ""
+
+    def row(self) -> dict:
+        base = {"correlation": self.spec.key, "figure": self.spec.figure, "x": self.spec.x, "y": self.spec.y,
+                "model": self.spec.model, "slice": self.slice, "n": self.n}
+        if self.fit is None:
+            return base | {"reason": self.reason}
+        return base | self.fit.to_dict() | {"reason": ""}
+
+
+def fit_study(points: pd.DataFrame, specs=STUDY, *, n_boot: int = 199, seed: int = 0) -> list[FitResult]:
+    """Fit every correlation pooled and, where the spec says, per value of its `by` column."""
+    out: list[FitResult] = []
+    for spec in specs:
+        sub = subset(points, spec)
+        slices = [("all", sub)]
+        if spec.by and spec.by in sub.columns:
+            slices += [(f"{spec.by}={v:g}" if isinstance(v, float) else f"{spec.by}={v}", g)
+                       for v, g in sub.groupby(spec.by, sort=True)]
+        for name, g in slices:
+            if spec.x not in g.columns or spec.y not in g.columns:
+                out.append(FitResult(spec, name, 0, None, f"no fit: column {spec.x if spec.x not in g.columns else spec.y} missing"))
+                continue
+            x = pd.to_numeric(g[spec.x], errors="coerce").to_numpy(float)
+            y = pd.to_numeric(g[spec.y], errors="coerce").to_numpy(float)
+            n = int((np.isfinite(x) & np.isfinite(y)).sum())
+            try:
+                out.append(FitResult(spec, name, n, fit_bilinear(x, y, spec.model, n_boot=n_boot, seed=seed)))
+            except FitError as exc:
+                out.append(FitResult(spec, name, n, None, str(exc)))
+    return out
