@@ -1,0 +1,243 @@
+"""The failure criterion (seed §6.4.3–6.4.5, METHODS.md §7): profile → θa → θr → E → tan δ.
+
+Chain, as the study prescribes (§6.4.4):
+  * most surfaces: θa with the > 92° filter, θr from the θa–θr correlation (Fig. 6.8, the fit of the
+    case's particle–surface friction if the campaign has it, else the pooled fit);
+  * surfaces with regular flat spacing between asperities (Group 2 kind): θa with the ≥ 90° filter,
+    θr = (θr/θa)·θa from the Fig. 6.9 correlation (x axis: θa counterclockwise from +x);
+  * non-dilative surface (θa undefined): θa = 0, i.e. the correlation's vertical-axis intercept
+    (≈ φμ, §6.4.3);
+  * E from the E–θr correlation (Fig. 6.10a); tan δ = E·tan φ, tan φ of the granular material alone.
+All angles are ψ, degrees from vertical, unless a name says ccw.
+
+STUDY DEFAULTS (used when no campaign has been fitted) are approximate readings of the published
+figures, not fits — the output says "study defaults" wherever they are used:
+  θr(θa) = φμ + (35° − φμ)·θa/40°  for θa ≤ 40°;  35° + 0.5·(θa − 40°) beyond   (Fig. 6.8: intercept
+           ≈ φμ, slope falling with friction up to the ~40° breakpoint, one common line above it)
+  θr/θa  = 0.5 + 0.5·min(θa,ccw − 95°, 35°)/35° for flat-spaced surfaces (Fig. 6.9; coarse reading)
+  E(θr)  = tan(min(θr, 30°)) / tan φ (Fig. 6.10a: full mobilisation beyond θr ≈ 30°; at θr = φμ this
+           is tan φμ / tan φ, the non-dilative answer)
+  tan φ  = tan 30° unless given (an assumption: the study does not print its box friction angle)
+  fitted θa range 0–60°.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from interphase.analysis.correlations import SPECS, BilinearFit, FitError, fit_bilinear, subset
+from interphase.errors import InputError
+
+DEFAULT_PHI_DEG = 30.0
+FULL_MOBILISATION_DEG = 30.0
+STUDY_DEFAULT_RANGE = (0.0, 60.0)
+FLAT_TILT_DEG = 2.0          # a raw-profile segment flatter than this is "flat" (the 92° filter's 2°)
+MIN_FLAT_SHARE = 0.10        # flats must cover ≥ 10 % of the length …
+MAX_FLAT_CV = 0.25           # … in runs of nearly equal length (coefficient of variation)
+
+
+class _Curve:
+    """A default correlation: predict(x) plus no interval."""
+
+    def __init__(self, fn, name: str):
+        self._fn = fn
+        self.name = name
+        self.x_range = STUDY_DEFAULT_RANGE
+
+    def predict(self, x):
+        return self._fn(np.asarray(x, dtype=float))
+
+    def predict_interval(self, x):
+        return (math.nan, math.nan)
+
+
+def default_theta_r(friction: float) -> _Curve:
+    phi_mu = math.degrees(math.atan(friction))
+
+    def fn(a):
+        return np.where(a <= 40.0, phi_mu + (35.0 - phi_mu) * a / 40.0, 35.0 + 0.5 * (a - 40.0))
+    return _Curve(fn, f"study default θr(θa), φμ = {phi_mu:.2f}°")
+
+
+def default_ratio() -> _Curve:
+    return _Curve(lambda a: 0.5 + 0.5 * np.clip(a - 95.0, 0.0, 35.0) / 35.0, "study default θr/θa(θa ccw)")
+
+
+def default_efficiency(tan_phi: float) -> _Curve:
+    return _Curve(lambda r: np.tan(np.radians(np.clip(r, 0.0, FULL_MOBILISATION_DEG))) / tan_phi,
+                  "study default E(θr) = tan min(θr, 30°) / tan φ")
+
+
+@dataclass
+class CriterionModel:
+    """The three correlations of the chain plus tan φ. Fits are BilinearFit (campaign) or defaults."""
+    source: str                                   # "study defaults" | "campaign NAME"
+    tan_phi: float
+    theta_r: dict = field(default_factory=dict)   # friction (float) or "all" → fit of θr vs θa (> 92°)
+    ratio: object | None = None                   # θr/θa vs θa ccw (≥ 90°), flat-spaced
+    efficiency: object | None = None              # E vs θr
+    reasons: dict = field(default_factory=dict)   # why a correlation is missing
+    is_default: bool = False
+
+    @classmethod
+    def study_defaults(cls, friction: float, tan_phi: float | None = None) -> "CriterionModel":
+        tp = math.tan(math.radians(DEFAULT_PHI_DEG)) if tan_phi is None else tan_phi
+        return cls(source="study defaults", tan_phi=tp, theta_r={friction: default_theta_r(friction)},
+                   ratio=default_ratio(), efficiency=default_efficiency(tp), is_default=True)
+
+    @classmethod
+    def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
+        """Fit the chain's correlations on a points table (correlations.prepare_points)."""
+        reasons: dict = {}
+
+        def fit(spec_key, df):
+            spec = SPECS[spec_key]
+            try:
+                return fit_bilinear(pd.to_numeric(df[spec.x], errors="coerce"), pd.to_numeric(df[spec.y], errors="coerce"),
+                                    spec.model, n_boot=n_boot, seed=seed)
+            except FitError as exc:
+                reasons[spec_key] = str(exc)
+                return None
+
+        tr: dict = {}
+        pts8 = subset(points, SPECS["fig6_8"])
+        tr["all"] = fit("fig6_8", pts8)
+        for mu, g in pts8.groupby("friction_ps"):
+            f = fit("fig6_8", g)
+            if f is not None:
+                tr[float(mu)] = f
+        reasons.pop("fig6_8", None) if tr["all"] is not None else None
+        tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
+        return cls(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan,
+                   theta_r={k: v for k, v in tr.items() if v is not None},
+                   ratio=fit("fig6_9", subset(points, SPECS["fig6_9"])),
+                   efficiency=fit("fig6_10a", points), reasons=reasons)
+
+
+def regular_flat_spacing(x, z, d50: float) -> tuple[bool, str]:
+    """Does a raw profile (x, z in m) have regular flat spacing between asperities (Group-2 kind)?
+    Rule (the project's; the study only says "regular horizontal spacing"): segments tilted < 2° are
+    flat; flats joined into runs, runs shorter than 0.1·D50 ignored; regular when the runs cover
+    ≥ 10 % of the length, there are ≥ 2 interior runs (the end runs are cut by the profile) and their
+    lengths vary by ≤ 25 % (coefficient of variation)."""
+    x = np.asarray(x, float)
+    z = np.asarray(z, float)
+    dx, dz = np.diff(x), np.diff(z)
+    flat = np.abs(np.degrees(np.arctan2(dz, dx))) < FLAT_TILT_DEG
+    if not flat.any():
+        return False, "no flat segments"
+    edges = np.diff(np.concatenate([[0], flat.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    csum = np.concatenate([[0.0], np.cumsum(dx)])
+    runs = csum[ends] - csum[starts]
+    interior = (starts > 0) & (ends < flat.size)
+    runs_i = runs[interior & (runs >= 0.1 * d50)]
+    share = runs[runs >= 0.1 * d50].sum() / max(csum[-1], 1e-300)
+    if share < MIN_FLAT_SHARE:
+        return False, f"flats cover {share:.0%} of the length (< {MIN_FLAT_SHARE:.0%})"
+    if runs_i.size < 2:
+        return False, "fewer than two interior flat runs"
+    cv = float(runs_i.std() / runs_i.mean())
+    if cv > MAX_FLAT_CV:
+        return False, f"flat runs irregular (length CV {cv:.2f} > {MAX_FLAT_CV})"
+    return True, f"{runs_i.size} flat runs of {runs_i.mean() / d50:.2g}·D50 (CV {cv:.2f}), {share:.0%} of the length"
+
+
+@dataclass
+class Prediction:
+    source: str
+    branch: str                   # "dilative (Fig. 6.8)" | "flat-spaced (Fig. 6.9)" | "non-dilative"
+    filter: int
+    theta_a_deg: float            # ψ used in the chain (0 for non-dilative)
+    theta_a_ccw_deg: float
+    theta_r_deg: float
+    theta_r_interval: tuple
+    efficiency: float
+    efficiency_interval: tuple
+    tan_phi: float
+    tan_delta: float
+    tan_delta_interval: tuple
+    delta_deg: float
+    delta_interval_deg: tuple
+    friction: float
+    notes: list
+
+    def to_dict(self) -> dict:
+        d = self.__dict__.copy()
+        for k in ("theta_r_interval", "efficiency_interval", "tan_delta_interval", "delta_interval_deg"):
+            d[k] = list(d[k])
+        return d
+
+
+def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
+    for k, f in model.theta_r.items():
+        if k != "all" and abs(float(k) - friction) <= 1e-9:
+            return f
+    if "all" in model.theta_r:
+        notes.append(f"no θa–θr fit for friction {friction:g}: the pooled fit (all frictions) is used")
+        return model.theta_r["all"]
+    raise InputError(f"no θa–θr correlation in {model.source}: " + model.reasons.get("fig6_8", "no data"),
+                     where="--fit", fix="run more cases, or leave out --fit for the study defaults")
+
+
+def _check_range(fit, value: float, what: str, source: str) -> None:
+    lo, hi = fit.x_range
+    tol = 1e-9 * max(1.0, abs(hi - lo))
+    if not (lo - tol <= value <= hi + tol):
+        raise InputError(f"{what} = {value:.2f}° is outside the fitted range {lo:.2f}–{hi:.2f}° of {source}",
+                         where="PROFILE", fix="the correlation would be extrapolated; fit a campaign that covers it")
+
+
+def predict(model: CriterionModel, friction: float, theta_a_92: float, theta_a_90: float,
+            flat_spaced: bool = False, filt: int | None = None) -> Prediction:
+    """Run the chain. θa in ψ degrees (NaN: non-dilative). `filt` forces the branch (92: Fig. 6.8,
+    90: Fig. 6.9); None chooses it from `flat_spaced` as the study does."""
+    if not (math.isfinite(friction) and friction >= 0):
+        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="--friction")
+    notes: list = []
+    use90 = (filt == 90) if filt is not None else flat_spaced
+    if model.is_default:
+        notes.append("STUDY DEFAULTS: approximate readings of the study's published figures, not fits")
+    if use90 and math.isfinite(theta_a_90) and theta_a_90 > 0:
+        if model.ratio is None:
+            raise InputError("no flat-spaced (Fig. 6.9) correlation in " + model.source + ": "
+                             + model.reasons.get("fig6_9", "no data"), where="--fit",
+                             fix="use --filter 92, or fit a campaign with Group 2 surfaces")
+        a_ccw = theta_a_90 + 90.0
+        _check_range(model.ratio, a_ccw, "θa (≥ 90°, ccw)", model.source)
+        ratio = float(model.ratio.predict(a_ccw))
+        r_lo, r_hi = model.ratio.predict_interval(a_ccw)
+        theta_r, tr_iv = ratio * theta_a_90, (r_lo * theta_a_90, r_hi * theta_a_90)
+        branch, a_used, f_used = "flat-spaced (Fig. 6.9)", theta_a_90, 90
+    else:
+        a = theta_a_92
+        branch = "dilative (Fig. 6.8)"
+        if not math.isfinite(a):
+            a, branch = 0.0, "non-dilative"
+            notes.append("θa undefined (non-dilative): θa = 0, the θa–θr intercept ≈ φμ")
+        fit = _pick_theta_r(model, friction, notes)
+        _check_range(fit, a, "θa (> 92°)", model.source)
+        theta_r = float(fit.predict(a))
+        tr_iv = fit.predict_interval(a)
+        a_used, f_used = a, 92
+    if model.efficiency is None:
+        raise InputError("no E–θr correlation in " + model.source + ": " + model.reasons.get("fig6_10a", "no data"),
+                         where="--fit", fix="the campaign needs box tests paired with its interface cases")
+    e = float(model.efficiency.predict(theta_r))
+    cands = [model.efficiency.predict_interval(t) for t in (theta_r, *tr_iv) if math.isfinite(t)]
+    lo = [c[0] for c in cands if math.isfinite(c[0])]
+    hi = [c[1] for c in cands if math.isfinite(c[1])]
+    e_iv = (min(lo), max(hi)) if lo and hi else (math.nan, math.nan)
+    tp = model.tan_phi
+    td = e * tp
+    td_iv = (e_iv[0] * tp, e_iv[1] * tp)
+    deg = lambda t: math.degrees(math.atan(t)) if math.isfinite(t) else math.nan
+    return Prediction(source=model.source, branch=branch, filter=f_used, theta_a_deg=a_used,
+                      theta_a_ccw_deg=a_used + 90.0, theta_r_deg=theta_r, theta_r_interval=tuple(tr_iv),
+                      efficiency=e, efficiency_interval=e_iv, tan_phi=tp, tan_delta=td, tan_delta_interval=td_iv,
+                      delta_deg=deg(td), delta_interval_deg=(deg(td_iv[0]), deg(td_iv[1])), friction=friction,
+                      notes=notes)
