@@ -1,0 +1,279 @@
+"""`campaign report`: every table, figure and the HTML page of a campaign, and the fitted criterion
+model `campaign predict --fit` uses.
+
+Output folder (default: the campaign's output folder + "/report"):
+  tables/   table_6_1_inputs, table_6_2_random (if any), results_<group>, correlations, lab_comparison
+            — each .csv, .md, .tex
+  figures/  fig6_3, fig6_5, fig6_6, fig6_7, fig6_8, fig6_9, fig6_10a, (fig6_10b_lab), curves_<group>,
+            network_<case> — each .png and .pdf (networks: PNG)
+  correlations.json   the fits (BilinearFit.to_dict rows)
+  index.html          links them all
+Memory: only the summaries table and, per figure, one case's series or contacts at a time are read.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from interphase import __version__
+from interphase.analysis.correlations import fit_study, prepare_points
+from interphase.analysis.criterion import CriterionModel
+from interphase.errors import InputError
+from interphase.report import figures as F
+from interphase.report import tables as T
+
+MAX_CURVES = 60            # stress-ratio curves per group figure (more become unreadable)
+NETWORK_CASES = 2          # force networks: the strongest and the weakest interface case
+MAX_POLAR = 4              # Fig. 6.6 panels
+
+
+@dataclass
+class ReportResult:
+    folder: Path
+    files: list[Path] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    fits: list = field(default_factory=list)
+    points: pd.DataFrame | None = None
+
+
+def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
+    """One line: package, engine and template versions, report template hash, date (UTC)."""
+    from interphase.report.html import template_hash
+
+    engines, thash = set(), set()
+    if store is not None and summaries is not None and "case_id" in summaries:
+        for cid in summaries["case_id"].astype(str):
+            try:
+                meta = json.loads((store.case_folder(cid) / "case.json").read_text())
+            except (OSError, ValueError):
+                continue
+            engines.add(str(meta.get("engine_version") or meta.get("engine") or "?"))
+            if meta.get("template_hash"):
+                thash.add(str(meta["template_hash"]))
+    elif summaries is not None and "engine" in summaries:
+        engines |= set(summaries["engine"].dropna().astype(str))
+    today = _dt.datetime.now(_dt.timezone.utc).date().isoformat()
+    return (f"interphase-dem {__version__}; engine {', '.join(sorted(engines)) or 'unknown'}; "
+            f"engine templates {', '.join(sorted(thash)) or 'unknown'}; report template {template_hash()}; {today}")
+
+
+def _profiles_for_polar(campaign, points) -> list[tuple[str, object]]:
+    """Up to MAX_POLAR distinct dilative-looking profiles: one per group first (the study's 6.6 picks a
+    Group 1 saw-tooth, a Group 2 spaced one, a random one and a measured one)."""
+    from interphase.surface.profiles import from_spec
+
+    chosen, seen = [], set()
+    if campaign is None:
+        return chosen
+    cases = [c for c in campaign.cases if c.role != "box" and c.case.profile is not None and c.case.profile.kind != "flat"]
+    by_group: dict = {}
+    for c in cases:
+        by_group.setdefault(c.group, []).append(c)
+    order = [g[len(g) // 2] for g in by_group.values()] + cases
+    for c in order:
+        spec = c.case.profile
+        key = (spec.kind, spec.params, spec.path)
+        if key in seen:
+            continue
+        seen.add(key)
+        d50 = c.case.d50
+        try:
+            prof = from_spec(spec, d50, min(c.case.box_length_d50, 40.0) * d50)
+        except InputError:
+            continue
+        label = f"{c.group}: {spec.kind} " + ", ".join(f"{k}={v:g}" for k, v in spec.params if k != "seed")
+        chosen.append((label, prof))
+        if len(chosen) >= MAX_POLAR:
+            break
+    return chosen
+
+
+def _curves(store, rows: pd.DataFrame) -> dict[str, pd.DataFrame]:
+    out = {}
+    for r in rows.head(MAX_CURVES).itertuples(index=False):
+        path = store.case_folder(str(r.case_id)) / "series.parquet"
+        try:
+            s = pd.read_parquet(path, columns=None)
+        except (OSError, ValueError):
+            continue
+        if "shear_disp" in s and "stress_ratio" in s:
+            keep = [c for c in ("shear_disp", "stress_ratio", "stress_ratio_smooth") if c in s]
+            out[str(r.label)] = s[keep]
+    return out
+
+
+def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=None, store=None,
+                          lab: str | Path | None = None, n_boot: int = 199, seed: int = 0,
+                          title: str | None = None) -> ReportResult:
+    """Everything `campaign report` writes, from a summaries table (CampaignStore.summaries() shape).
+    `store` (for curves, networks, provenance) and `campaign` (input tables, Fig. 6.6) are optional."""
+    out = Path(out)
+    tdir, fdir = out / "tables", out / "figures"
+    tdir.mkdir(parents=True, exist_ok=True)
+    fdir.mkdir(parents=True, exist_ok=True)
+    res = ReportResult(out)
+    prov = provenance(store, summaries)
+    points = prepare_points(summaries)
+    res.points = points
+    n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0
+    if points.empty:
+        res.warnings.append("no finished interface case: tables and figures are empty")
+    if points["tan_phi"].isna().all() if len(points) else True:
+        res.warnings.append("no paired box test finished: efficiency E (Figs 6.5, 6.10a) is undefined")
+    fits = fit_study(points, n_boot=n_boot, seed=seed)
+    res.fits = fits
+    (out / "correlations.json").write_text(json.dumps([_clean(fr.row()) for fr in fits], indent=1, allow_nan=False))
+    res.files.append(out / "correlations.json")
+
+    # ---- tables
+    tables: list[T.Table] = []
+    if campaign is not None:
+        tables += T.input_tables(campaign)
+    tables += T.results_tables(points)
+    tables.append(T.coefficient_table(fits))
+    lab_df = None
+    if lab is not None:
+        from interphase.report.lab import compare, read_lab
+
+        lab_df = read_lab(lab)
+        fitted = CriterionModel.from_points(points, f"campaign {campaign.name if campaign else 'report'}",
+                                            n_boot=min(n_boot, 99), seed=seed)
+        usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)
+        if not usable:
+            res.warnings.append("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to fit "
+                                "θa–θr and E–θr)")
+        model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu))
+        tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle", compare(lab_df, model_for),
+                              ["δ = atan(tan δ); predicted tan δ = E·tan φ."]))
+    table_entries = []
+    for t in tables:
+        paths = T.write_table(t, tdir, prov)
+        res.files += paths
+        table_entries.append({"title": t.title, "files": [p.relative_to(out).as_posix() for p in paths],
+                              "inline": t.name.startswith(("table_", "correlations", "lab_")),
+                              "html": _html_table(t.df)})
+
+    # ---- figures
+    figs: list[tuple[str, list[Path]]] = []
+    add = lambda title, paths: figs.append((title, paths))
+    add("Fig. 6.3: strength vs θn and θr at the surface (a, b) and in the sampling region (c, d)",
+        F.correlation_figure(points, fits, ["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"], "fig6_3", fdir,
+                             "Fig. 6.3: peak stress ratio vs principal directions θn, θr"))
+    add("Fig. 6.5: stress ratio and E vs Rnc(D50)", F.figure_6_5(points, fdir))
+    d50 = float(pd.to_numeric(summaries.get("d50", pd.Series([0.7e-3])), errors="coerce").dropna().median()) \
+        if len(summaries) else 0.7e-3
+    add("Fig. 6.6: polar distributions of centroid-trace normals", F.figure_6_6(_profiles_for_polar(campaign, points),
+                                                                               d50 if math.isfinite(d50) else 0.7e-3, fdir))
+    add("Fig. 6.7: peak stress ratio vs θa, both filters",
+        F.correlation_figure(points, fits, ["fig6_7a", "fig6_7b"], "fig6_7", fdir, "Fig. 6.7: peak stress ratio vs θa"))
+    add("Fig. 6.8: θr vs θa per friction", F.correlation_figure(points, fits, ["fig6_8"], "fig6_8", fdir,
+                                                                "Fig. 6.8: θr vs θa (> 92°)"))
+    add("Fig. 6.9: θr/θa vs θa for flat-spaced surfaces", F.correlation_figure(points, fits, ["fig6_9"], "fig6_9", fdir,
+                                                                               "Fig. 6.9: flat-spaced surfaces"))
+    add("Fig. 6.10a: efficiency vs θr", F.correlation_figure(points, fits, ["fig6_10a"], "fig6_10a", fdir,
+                                                             "Fig. 6.10a: failure criterion E(θr)"))
+    if lab_df is not None:
+        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir))
+    if store is not None:
+        allrows = summaries.copy()
+        allrows["group"] = allrows.get("group", "").astype(str)
+        for grp, g in allrows.groupby("group", sort=True):
+            curves = _curves(store, g.sort_values("label"))
+            if curves:
+                add(f"Stress ratio vs shear displacement, {grp}",
+                    F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ({len(curves)} cases)",
+                                    f"curves_{T._safe(grp)}", fdir))
+        add_net = _networks(store, points, fdir, res)
+        figs += add_net
+    for _, paths in figs:
+        res.files += paths
+
+    # ---- page
+    from markupsafe import Markup
+
+    from interphase.report.html import render_page
+
+    fig_entries = [{"title": t, "png": p[0].relative_to(out).as_posix(),
+                    "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None} for t, p in figs]
+    for e in table_entries:
+        e["html"] = Markup(e["html"])
+    page = render_page(out / "index.html", title=title or f"Report: {campaign.name if campaign else 'campaign'}",
+                       provenance=prov, n_cases=len(points), n_box=n_box, warnings=res.warnings,
+                       tables=table_entries, figures=fig_entries)
+    res.files.append(page)
+    return res
+
+
+def _networks(store, points: pd.DataFrame, fdir: Path, res: ReportResult) -> list:
+    """Force network at the peak snapshot of the strongest and the weakest interface case."""
+    from interphase.report.network import draw_network
+
+    out = []
+    cand = points.assign(_p=pd.to_numeric(points.get("peak_stress_ratio"), errors="coerce")).dropna(subset=["_p"])
+    if cand.empty or "peak_snapshot" not in cand:
+        return out
+    cand = cand.sort_values("_p")
+    chosen = [cand.iloc[-1]] + ([cand.iloc[0]] if len(cand) > 1 else [])
+    for r in chosen[:NETWORK_CASES]:
+        path = store.case_folder(str(r["case_id"])) / "contacts.parquet"
+        snap = r.get("peak_snapshot")
+        if not path.exists() or snap is None or (isinstance(snap, float) and not math.isfinite(snap)):
+            res.warnings.append(f"no force network for {r['label']}: no contacts.parquet or peak snapshot")
+            continue
+        contacts = pd.read_parquet(path)
+        png = fdir / f"network_{T._safe(r['label'])}.png"
+        try:
+            draw_network(contacts, int(snap), png, title=f"{r['label']}: peak (snapshot {int(snap)}), "
+                         f"tan δ = {r['_p']:.3f}")
+        except InputError as exc:
+            res.warnings.append(f"no force network for {r['label']}: {exc}")
+            continue
+        out.append((f"Force network at peak: {r['label']} (tan δ = {r['_p']:.3f})", [png]))
+    return out
+
+
+def _html_table(df: pd.DataFrame) -> str:
+    return df.to_html(index=False, na_rep="–", float_format=lambda v: f"{v:.4g}", border=0, escape=True)
+
+
+def _clean(d: dict) -> dict:
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else
+                v.item() if isinstance(v, np.generic) else v) for k, v in d.items()}
+
+
+def open_campaign(campaign_path: str | Path):
+    """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run."""
+    from interphase.campaign.schema import load_campaign
+    from interphase.campaign.store import CampaignStore
+
+    campaign = load_campaign(campaign_path)
+    root = Path(campaign.output)
+    if not (root / "index.sqlite").exists() and not any(root.glob("*/DONE")):
+        raise InputError(f"no results in {root}", where=str(campaign_path),
+                         fix=f"run `campaign run {campaign_path}` first")
+    store = CampaignStore(root)
+    return campaign, store, store.summaries()
+
+
+def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
+                 n_boot: int = 199) -> ReportResult:
+    campaign, store, summ = open_campaign(campaign_path)
+    try:
+        return report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
+                                     lab=lab, n_boot=n_boot)
+    finally:
+        store.close()
+
+
+def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel:
+    """The criterion's correlations fitted on a campaign's finished cases (for `campaign predict --fit`)."""
+    campaign, store, summ = open_campaign(campaign_path)
+    store.close()
+    return CriterionModel.from_points(prepare_points(summ), f"campaign {campaign.name}", n_boot=n_boot)

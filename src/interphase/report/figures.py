@@ -1,0 +1,212 @@
+"""The study's figures (6.3, 6.5–6.10) as PNG and PDF, matplotlib Agg.
+
+Points: colour = particle–surface friction tan φμ, marker = group, hollow = mono-disperse, filled =
+poly-disperse. Fits are drawn over their fitted x range; a correlation without a fit draws its points
+and says why ("no fit: n = 3 < 7"). Angles are ψ, degrees from vertical, unless an axis says ccw.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from interphase.analysis.correlations import SPECS, subset  # noqa: E402
+
+MARKERS = "osD^vP*Xph<>"
+DPI = 110
+
+
+def save(fig, folder: Path, stem: str) -> list[Path]:
+    """PNG and PDF of `fig`, then close it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = [folder / f"{stem}.png", folder / f"{stem}.pdf"]
+    fig.savefig(paths[0], dpi=DPI)
+    fig.savefig(paths[1])
+    plt.close(fig)
+    return paths
+
+
+def _styles(points: pd.DataFrame):
+    fr = sorted(pd.to_numeric(points.get("friction_ps", pd.Series(dtype=float)), errors="coerce").dropna().unique())
+    groups = sorted(points["group"].astype(str).unique()) if "group" in points else []
+    colour = {mu: f"C{i % 10}" for i, mu in enumerate(fr)}
+    marker = {g: MARKERS[i % len(MARKERS)] for i, g in enumerate(groups)}
+    return colour, marker
+
+
+def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bool = True) -> int:
+    """Draw the points; returns how many were finite."""
+    n = 0
+    if x not in points or y not in points or points.empty:
+        return 0
+    xs = pd.to_numeric(points[x], errors="coerce")
+    ys = pd.to_numeric(points[y], errors="coerce")
+    ok = xs.notna() & ys.notna() & np.isfinite(xs) & np.isfinite(ys)
+    p = points[ok].assign(_x=xs[ok], _y=ys[ok])
+    # one scatter call per (friction, group, gradation) keeps 1000-case campaigns fast
+    for (mu, grp, grad), g in p.groupby([p["friction_ps"].fillna(-1), p["group"].astype(str),
+                                         p.get("gradation", pd.Series("", index=p.index)).astype(str)], sort=True):
+        c = colour.get(mu, "0.3")
+        ax.scatter(g["_x"], g["_y"], s=22, marker=marker.get(grp, "o"), edgecolors=c,
+                   facecolors=c if grad == "poly" else "none", linewidths=1.0,
+                   label=f"{grp}, μ={mu:g}, {grad}" if legend else None)
+        n += len(g)
+    return n
+
+
+def draw_fits(ax, fits, colour) -> None:
+    """Fit lines (pooled: black; per friction: that friction's colour); a note for missing fits."""
+    notes = []
+    for fr in fits:
+        if fr.fit is None:
+            notes.append(f"{fr.slice}: {fr.reason}")
+            continue
+        lo, hi = fr.fit.x_range
+        xx = np.linspace(lo, hi, 200)
+        if fr.slice == "all":
+            ax.plot(xx, fr.fit.predict(xx), "k-", lw=1.6, label=f"fit (all): c = {fr.fit.c:.3g} "
+                    f"[{fr.fit.c_interval_profile[0]:.3g}, {fr.fit.c_interval_profile[1]:.3g}], R² = {fr.fit.r2:.2f}")
+        else:
+            mu = float(fr.slice.split("=")[1]) if "=" in fr.slice else None
+            ax.plot(xx, fr.fit.predict(xx), "--", lw=1.2, color=colour.get(mu, "0.4"),
+                    label=f"fit {fr.slice}: c = {fr.fit.c:.3g}")
+    if notes:
+        ax.text(0.02, 0.98, "\n".join(notes[:6]), transform=ax.transAxes, va="top", ha="left", fontsize=8,
+                color="C3", bbox=dict(facecolor="white", alpha=0.8, edgecolor="C3"))
+
+
+def correlation_panel(ax, points, spec_key: str, fit_results, colour, marker, legend=True) -> None:
+    spec = SPECS[spec_key]
+    pts = subset(points, spec)
+    n = scatter(ax, pts, spec.x, spec.y, colour, marker, legend)
+    draw_fits(ax, [f for f in fit_results if f.spec.key == spec_key], colour)
+    ax.set_xlabel(spec.x_label)
+    ax.set_ylabel(spec.y_label)
+    ax.set_title(f"Fig. {spec.figure}: {spec.title} (n = {n})", fontsize=9)
+    ax.grid(alpha=0.3)
+
+
+def _legend(fig, axes) -> None:
+    handles, labels = {}, []
+    for ax in np.atleast_1d(axes).ravel():
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in handles:
+                handles[lab] = h
+    if handles:
+        labs = list(handles)[:24]
+        fig.legend([handles[k] for k in labs], labs, loc="lower center", ncol=min(4, len(labs)), fontsize=7,
+                   frameon=False)
+
+
+def correlation_figure(points, fit_results, keys, stem: str, folder: Path, suptitle: str) -> list[Path]:
+    colour, marker = _styles(points)
+    ncol = 2 if len(keys) > 1 else 1
+    nrow = math.ceil(len(keys) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.2 * ncol, 4.6 * nrow + 1.2), squeeze=False)
+    for ax, key in zip(axes.ravel(), keys):
+        correlation_panel(ax, points, key, fit_results, colour, marker)
+        ax.legend(fontsize=7, loc="lower right", handles=[h for h, lab in zip(*ax.get_legend_handles_labels())
+                                                          if lab.startswith("fit")] or None) if any(
+            lab.startswith("fit") for lab in ax.get_legend_handles_labels()[1]) else None
+    for ax in axes.ravel()[len(keys):]:
+        ax.set_visible(False)
+    fig.suptitle(suptitle, fontsize=11)
+    _legend(fig, axes)
+    fig.tight_layout(rect=(0, 0.12 if nrow == 1 else 0.08, 1, 0.96))
+    return save(fig, folder, stem)
+
+
+def figure_6_5(points, folder: Path) -> list[Path]:
+    """Peak stress ratio and E against Rnc(D50) (no fit: the study shows Rnc does not correlate uniquely)."""
+    colour, marker = _styles(points)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.4))
+    for ax, (y, lab) in zip(axes, (("peak_stress_ratio", "peak stress ratio tan δ [-]"),
+                                   ("efficiency", "efficiency E = tan δ / tan φ [-]"))):
+        n = scatter(ax, points, "rnc", y, colour, marker)
+        ax.set_xlabel("Rnc(D50) [-] (centroid trace)")
+        ax.set_ylabel(lab)
+        ax.set_title(f"Fig. 6.5: {lab.split(' [')[0]} vs Rnc (n = {n})", fontsize=9)
+        ax.grid(alpha=0.3)
+        if n == 0:
+            ax.text(0.5, 0.5, f"no points with both Rnc and {y}", transform=ax.transAxes, ha="center", color="C3")
+    fig.suptitle("Fig. 6.5: strength vs normalised roughness Rnc(D50)")
+    _legend(fig, axes)
+    fig.tight_layout(rect=(0, 0.12, 1, 0.95))
+    return save(fig, folder, "fig6_5")
+
+
+def figure_6_6(profiles: list[tuple[str, object]], d50: float, folder: Path, bins: int = 72) -> list[Path]:
+    """Polar (upper half-plane) length-weighted distributions of centroid-trace normals of selected
+    profiles, θ ccw from +x; kept side (> 92°) shaded; θa (> 92°) as an arrow."""
+    from interphase.surface.normals import keep_mask, segment_normals, theta_a
+    from interphase.surface.trace import centroid_trace
+
+    k = max(1, len(profiles))
+    fig = plt.figure(figsize=(4.2 * k, 4.0))
+    edges = np.linspace(0, math.pi, bins + 1)
+    mids = 0.5 * (edges[:-1] + edges[1:])
+    for i, (label, prof) in enumerate(profiles):
+        ax = fig.add_subplot(1, k, i + 1, projection="polar")
+        th, w = segment_normals(centroid_trace(prof, d50))
+        hist, _ = np.histogram(th, bins=edges, weights=w)
+        hist = hist / max(hist.sum(), 1e-300)
+        ax.bar(edges[:-1], hist, width=np.diff(edges), align="edge",
+               color=np.where(keep_mask(mids, 92), "C0", "0.75"), edgecolor="none")
+        res = theta_a(prof, d50, 92)
+        if res.dilative and hist.max() > 0:
+            ax.annotate("", xy=(math.radians(res.theta_a_ccw_deg), hist.max()), xytext=(0, 0),
+                        arrowprops=dict(color="C3", width=1.2))
+        ax.set_thetamin(0)
+        ax.set_thetamax(180)
+        ax.set_yticklabels([])
+        ta = f"θa = {res.theta_a_deg:.1f}°" if res.dilative else "θa undefined (non-dilative)"
+        ax.set_title(f"({chr(97 + i)}) {label}\n{ta}", fontsize=8)
+    if not profiles:
+        fig.text(0.5, 0.5, "no surface profiles in this campaign", ha="center", color="C3")
+    fig.suptitle(f"Fig. 6.6: centroid-trace normal distributions (D50 = {d50 * 1e3:g} mm; θ ccw from +x)", fontsize=10)
+    fig.tight_layout()
+    return save(fig, folder, "fig6_6")
+
+
+def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder: Path) -> list[Path]:
+    """Stress ratio vs shear displacement, one curve per case (smoothed where the series has it)."""
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for i, (label, s) in enumerate(sorted(curves.items())):
+        y = s["stress_ratio_smooth"] if "stress_ratio_smooth" in s else s["stress_ratio"]
+        ax.plot(s["shear_disp"] * 1e3, y, lw=1.0, color=f"C{i % 10}", label=label)
+    ax.set_xlabel("shear displacement [mm]")
+    ax.set_ylabel("stress ratio [-] (surface ΣFx/Σ−Fz; box τ/σ)")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    if not curves:
+        ax.text(0.5, 0.5, "no stored series for these cases", transform=ax.transAxes, ha="center", color="C3")
+    elif len(curves) <= 12:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return save(fig, folder, stem)
+
+
+def lab_figure(points, lab: pd.DataFrame, folder: Path) -> list[Path]:
+    """Fig. 6.10b style: simulated and measured peak efficiency (or tan δ) against θa (> 92°)."""
+    colour, marker = _styles(points)
+    y = "efficiency" if lab["efficiency"].notna().any() else "peak_stress_ratio"
+    fig, ax = plt.subplots(figsize=(8, 5.6))
+    scatter(ax, points, "theta_a_deg_92", y, colour, marker)
+    lab_y = lab["efficiency"] if y == "efficiency" else lab["tan_delta"]
+    for i, (mat, g) in enumerate(lab.assign(_y=lab_y).groupby("material", sort=True)):
+        ax.scatter(g["theta_a_deg"].fillna(0.0), g["_y"], s=60, marker="*", color=f"C{(i + 5) % 10}",
+                   edgecolors="k", linewidths=0.5, label=f"lab: {mat}", zorder=5)
+    ax.set_xlabel("θa, filter > 92° [° from vertical] (non-dilative at 0)")
+    ax.set_ylabel("efficiency E [-]" if y == "efficiency" else "peak stress ratio tan δ [-]")
+    ax.set_title("Fig. 6.10b: laboratory data with the simulations", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return save(fig, folder, "fig6_10b_lab")
