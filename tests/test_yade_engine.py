@@ -1,0 +1,227 @@
+"""Real YADE runs on tiny quasi-2D cases (200 grains, soft G, 2 mm of shear: ~9 s each), the same
+cases and physics checks as tests/test_liggghts.py, plus YADE-specific output checks."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from interphase.case import Case
+from interphase.engines.base import EngineError, EngineProfile, get_engine
+from interphase.engines.yade import Yade, classify, contact_parameters
+from interphase.surface.spec import ProfileSpec
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
+from tests.conftest import need_binary
+from tests.reader_contract import ReaderContract
+
+pytestmark = pytest.mark.yade
+
+TINY = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10,
+            shear_distance=2e-3, snapshot_every=0.5e-3)
+SAW = ("sawtooth", dict(rt=1.0, sw=2.0, sr=0.0))
+
+
+def tiny(test="interface", profile=("flat", {}), **kw) -> Case:
+    spec = None if test == "box" else ProfileSpec.make(profile[0], **profile[1])
+    return Case(test=test, profile=spec, **(TINY | kw))
+
+
+@pytest.fixture(scope="session")
+def yade_engine():
+    need_binary("yade")
+    return Yade()
+
+
+@pytest.fixture(scope="session")
+def yrun(yade_engine, tmp_path_factory):
+    cache = {}
+
+    def _run(case: Case):
+        key = repr(case.canonical())
+        if key not in cache:
+            folder = tmp_path_factory.mktemp("yade")
+            yade_engine.write_input(case, folder)
+            yade_engine.execute(folder)
+            cache[key] = (folder, yade_engine.read_results(folder))
+        return cache[key]
+    return _run
+
+
+def ratio(history) -> pd.Series:
+    return history.surface_fx / -history.surface_fz
+
+
+def steady_ratio(history, start=1.0e-3):
+    """Mean surface stress ratio ΣFx/Σ(−Fz) over shear displacement ≥ start [m]."""
+    return float(ratio(history[history.shear_disp >= start]).mean())
+
+
+def peak_ratio(history, window=9):
+    return float(ratio(history).rolling(window, center=True).mean().max())
+
+
+def test_flat_surface_ratio_equals_particle_surface_friction(yrun):
+    for mu in (0.0, 0.2):
+        _, res = yrun(tiny(friction_ps=mu))
+        assert steady_ratio(res.history) == pytest.approx(mu, abs=0.05 if mu else 0.01)
+
+
+def test_sawtooth_is_clearly_stronger_than_flat(yrun):
+    _, flat = yrun(tiny(friction_ps=0.5))
+    _, saw = yrun(tiny(profile=SAW, friction_ps=0.5))
+    assert peak_ratio(saw.history) > peak_ratio(flat.history) + 0.15
+    # and over the whole shear, not only at a spike
+    assert steady_ratio(saw.history, 0.5e-3) > steady_ratio(flat.history, 0.5e-3)
+
+
+def test_box_peak_in_range(yrun):
+    _, box = yrun(tiny(test="box", friction_ps=0.5))
+    assert 0.4 <= peak_ratio(box.history) <= 0.9
+
+
+def test_platen_holds_the_normal_force(yrun):
+    case = tiny(friction_ps=0.2)
+    _, res = yrun(case)
+    target = case.normal_stress * case.box_length * case.thickness
+    np.testing.assert_allclose(res.history.normal_force.median(), target, rtol=0.02)
+    assert (res.history.normal_force.between(0.8 * target, 1.2 * target)).mean() > 0.95
+
+
+@pytest.mark.parametrize("profile", [("flat", {}), SAW], ids=["flat", "sawtooth"])
+def test_summed_surface_contacts_equal_the_surface_force(yrun, profile):
+    """Σ contact forces of each snapshot = the force YADE reports on the surface facets (O.forces),
+    both components, to 1e−3: YADE's contact force is exactly what it applied (no damping term is
+    added at sliding contacts)."""
+    _, res = yrun(tiny(profile=profile, friction_ps=0.2 if profile[0] == "flat" else 0.5))
+    c, h = res.contacts, res.history
+    ps = c[c.kind == "ps"].groupby("time")[["fx", "fz"]].sum()
+    assert len(ps) == 5
+    for t, row in ps.iterrows():
+        hr = h.iloc[int(np.argmin(np.abs(h.time.to_numpy() - t)))]
+        assert hr.time == pytest.approx(t, abs=1e-12)
+        assert -row.fz == pytest.approx(hr.surface_fz, rel=1e-3)
+        assert -row.fx == pytest.approx(hr.surface_fx, rel=1e-3, abs=1e-3 * abs(hr.surface_fz))
+
+
+def test_each_grain_surface_contact_counted_once(yrun):
+    """A grain on a convex saw-tooth vertex touches two facets at the same point in YADE; the
+    reader merges them: no (snapshot, grain, point) appears twice, and the raw file did have some."""
+    folder, res = yrun(tiny(profile=SAW, friction_ps=0.5))
+    ps = res.contacts[res.contacts.kind == "ps"]
+    assert not ps.duplicated(["snapshot", "id2", "cx", "cz"]).any()
+    raw = pd.read_csv(folder / "contacts.csv")
+    lo, hi = json.loads((folder / "bodies.json").read_text())["walls"][0]
+    raw_ps = raw[raw.b1.between(lo, hi)]
+    point = raw_ps.assign(qx=(raw_ps.cx / 1e-10).round(), qz=(raw_ps.cz / 1e-10).round())   # same point to 0.1 nm
+    doubled = point.duplicated(["step", "b2", "qx", "qz"]).sum()
+    assert doubled > 0                                   # the saw-tooth does produce vertex contacts
+    assert len(ps) == len(raw_ps) - doubled
+
+
+def test_tables_follow_the_contract(yrun):
+    _, res = yrun(tiny(friction_ps=0.2))
+    assert tuple(res.contacts.columns) == CONTACT_COLUMNS
+    assert tuple(res.history.columns) == HISTORY_COLUMNS
+    assert tuple(res.particles.columns) == PARTICLE_COLUMNS
+    c = res.contacts
+    assert c.snapshot.nunique() == 5                     # 2 mm / 0.5 mm + the start of shear
+    assert sorted(res.particles.id.unique()) == list(range(1, 201))
+    pw = c[c.kind == "pw"]
+    assert set(pw.id1.unique()) <= {-2, -3}              # sides = −2, platen = −3 (LIGGGHTS mesh order)
+    # wall contacts: branch from the contact point to the grain centre is along n
+    w = c[c.kind != "pp"]
+    branch = np.column_stack([w.x2 - w.x1, w.z2 - w.z1])
+    np.testing.assert_allclose(np.einsum("ij,ij->i", branch, np.column_stack([w.nx, w.nz])),
+                               np.hypot(*branch.T), rtol=1e-6)
+
+
+class TestYadeReader(ReaderContract):
+    @pytest.fixture(scope="class")
+    def finished(self, yrun):
+        return yrun(tiny(friction_ps=0.2))
+
+
+def test_parquet_files_written(yrun, tmp_path):
+    from interphase.io.yade import write_parquet
+
+    folder, res = yrun(tiny(friction_ps=0.2))
+    paths = write_parquet(folder, res)
+    back = pd.read_parquet(paths["history"])
+    pd.testing.assert_frame_equal(back, res.history)
+
+
+def test_render_is_data_and_the_script_carries_no_values(yade_engine):
+    a, b = yade_engine.render(tiny(friction_ps=0.2)), yade_engine.render(tiny(friction_ps=0.5, seed=7))
+    assert set(a) == {"driver.py", "params.json"}
+    assert a["driver.py"] == b["driver.py"]              # values live only in params.json
+    assert a["params.json"] != b["params.json"]
+    p = json.loads(a["params.json"])
+    assert p["material"]["mu_ps"] == 0.2 and len(p["grains"]["x"]) == 200
+    compile(a["driver.py"], "driver.py", "exec")
+    box = yade_engine.render(tiny(test="box"))
+    assert box["driver.py"] != a["driver.py"] and "direct shear box" in box["driver.py"]
+
+
+def test_contact_parameters_mapping():
+    """E = 2G(1+ν); betan = √(5/6)·|ln e|/√(ln²e+π²) (LIGGGHTS' dashpot); eta = μr/2."""
+    c = tiny(restitution=0.5, rolling_friction=0.1)
+    p = contact_parameters(c)
+    assert p["E"] == pytest.approx(2 * 50e6 * 1.3)
+    assert p["betan"] == pytest.approx(np.sqrt(5 / 6) * 0.2155, abs=2e-4)
+    assert p["eta"] == pytest.approx(0.05) and p["krot"] > 0
+    assert contact_parameters(tiny(restitution=1.0))["betan"] == 0.0
+
+
+def test_python_error_is_an_engine_error_with_its_last_line(yade_engine, tmp_path):
+    yade_engine.write_input(tiny(), tmp_path)
+    p = json.loads((tmp_path / "params.json").read_text())
+    del p["material"]
+    (tmp_path / "params.json").write_text(json.dumps(p))
+    with pytest.raises(EngineError) as err:
+        yade_engine.execute(tmp_path)
+    assert err.value.cause == "engine_error"
+    assert "KeyError" in str(err.value).splitlines()[0] and "material" in str(err.value).splitlines()[0]
+    assert "Traceback" in err.value.log_tail
+
+
+def test_lost_grains_are_an_engine_error(yade_engine, tmp_path):
+    """No surface under the soil: grains fall out of the domain during consolidation."""
+    yade_engine.write_input(tiny(shear_distance=0.5e-3, snapshot_every=0.5e-3), tmp_path)
+    p = json.loads((tmp_path / "params.json").read_text())
+    p["walls"][0]["triangles"] = [[-1.0, 0.0, -1.0, -0.999, 0.0, -1.0, -0.9995, 0.0006, -1.0]]
+    (tmp_path / "params.json").write_text(json.dumps(p))
+    with pytest.raises(EngineError) as err:
+        yade_engine.execute(tmp_path)
+    assert err.value.cause == "lost_atoms"
+
+
+def test_timeout_is_classified(tmp_path):
+    need_binary("yade")
+    eng = Yade(profile=EngineProfile(binary="yade", timeout=2.0))
+    eng.write_input(tiny(), tmp_path)
+    with pytest.raises(EngineError) as err:
+        eng.execute(tmp_path)
+    assert err.value.cause == "timeout"
+
+
+def test_classify_and_profile(monkeypatch):
+    assert classify(0, "Running script driver.py\ninterphase: finished 10 steps") == (None, "")
+    assert classify(0, "Running script driver.py")[0] == "engine_error"        # ended early
+    assert classify(-9, "Running script")[0] == "killed"
+    tb = "Traceback (most recent call last):\n  File \"driver.py\", line 3\nValueError: bad facet vertices\n"
+    assert classify(1, tb) == ("bad_mesh", "ValueError: bad facet vertices")
+    monkeypatch.setenv("INTERPHASE_YADE_THREADS", "2")
+    monkeypatch.setenv("INTERPHASE_YADE_BINARY", "/opt/yade/bin/yade")
+    eng = get_engine("yade")
+    assert eng.profile.threads == 2 and "-j" in eng.command()
+    monkeypatch.setenv("INTERPHASE_YADE_THREADS", "two")
+    from interphase.errors import InputError
+    with pytest.raises(InputError, match="INTERPHASE_YADE_THREADS"):
+        Yade.default_profile()
+
+
+def test_version_from_the_binary(yade_engine):
+    assert yade_engine.version().startswith("YADE 20")
