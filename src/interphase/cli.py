@@ -275,7 +275,92 @@ def _add_crosscheck(sub) -> None:
 
 # ---- results: report, predict ------------------------------------------------------------------
 def _add_report(sub) -> None:
-    pass
+    p = sub.add_parser("report", help="tables (CSV/Markdown/LaTeX), figures 6.3–6.10 (PNG/PDF), fits and an HTML page")
+    p.add_argument("campaign", help="campaign file (TOML) whose cases have run")
+    p.add_argument("--out", default=None, help="output folder (default: the campaign's output folder/report)")
+    p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
+                   "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
+    p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
+    p.add_argument("--json", action="store_true", help="print JSON (files, warnings)")
+    p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser("predict", help="interface friction from a profile: θa → θr → E → tan δ")
+    p.add_argument("profile", help="profile file: Dektak export or two columns x z")
+    p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
+    p.add_argument("--friction", type=float, required=True, help="particle–surface friction tan φμ [-]")
+    p.add_argument("--fit", default=None, help="campaign file (TOML) whose fitted correlations to use "
+                   "(default: the study defaults, approximate readings of its figures)")
+    p.add_argument("--filter", type=int, default=None, choices=(92, 90),
+                   help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
+    p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
+    p.add_argument("--tan-phi", type=float, default=None, help="tan φ of the granular material (default: the "
+                   "campaign's box tests, or tan 30° with the study defaults)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_predict)
+
+
+def _cmd_report(args) -> int:
+    from interphase.report.build import build_report
+
+    if args.bootstrap < 0:
+        raise InputError(f"must be ≥ 0, got {args.bootstrap}", where="--bootstrap")
+    res = build_report(args.campaign, out=args.out, lab=args.lab, n_boot=args.bootstrap)
+    if args.json:
+        _print_json({"folder": str(res.folder), "files": [str(f) for f in res.files], "warnings": res.warnings})
+        return 0
+    for w in res.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"wrote {len(res.files)} files to {res.folder}; open {res.folder / 'index.html'}")
+    return 0
+
+
+def _cmd_predict(args) -> int:
+    import math
+
+    from interphase.analysis.criterion import CriterionModel, predict, regular_flat_spacing
+    from interphase.surface.normals import theta_a
+
+    d50 = _d50_m(args.d50)
+    if not (math.isfinite(args.friction) and args.friction >= 0):
+        raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
+    if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
+        raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
+    prof = _load_measured(args.profile, args.units)
+    t92, t90 = theta_a(prof, d50, 92), theta_a(prof, d50, 90)
+    flat_spaced, why = regular_flat_spacing(prof.x, prof.z, d50)
+    if args.fit:
+        from interphase.report.build import fitted_model
+
+        model = fitted_model(args.fit)
+        if args.tan_phi is not None:
+            model.tan_phi = args.tan_phi
+        if not math.isfinite(model.tan_phi):
+            raise InputError("the campaign has no finished box test, so no tan φ", where="--fit",
+                             fix="give --tan-phi")
+    else:
+        model = CriterionModel.study_defaults(args.friction, args.tan_phi)
+    p = predict(model, args.friction, t92.theta_a_deg, t90.theta_a_deg, flat_spaced, args.filter)
+    out = p.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "flat_spaced": flat_spaced,
+                         "flat_spacing_reason": why, "theta_a_deg_92": t92.theta_a_deg, "theta_a_deg_90": t90.theta_a_deg,
+                         "mean_slope_deg": t92.mean_slope_deg}
+    if args.json:
+        _print_json(out)
+        return 0
+    iv = lambda pair, fmt: "" if not all(map(math.isfinite, pair)) else f"  [{pair[0]:{fmt}}, {pair[1]:{fmt}}]"
+    if model.is_default:
+        print("*** STUDY DEFAULTS: approximate readings of the study's published figures, not fitted correlations ***")
+    print(f"profile     {args.profile}  (D50 = {args.d50:g} mm, tan φμ = {args.friction:g}, source: {p.source})")
+    print(f"surface     {'regular flat spacing: ' if flat_spaced else ''}{why}; mean asperity slope {t92.mean_slope_deg:.2f}°")
+    print(f"branch      {p.branch}, θa filter {p.filter}")
+    print(f"θa          {p.theta_a_deg:.2f}° from vertical ({p.theta_a_ccw_deg:.2f}° ccw)"
+          + ("  (undefined: non-dilative → 0)" if p.branch == "non-dilative" else ""))
+    print(f"θr          {p.theta_r_deg:.2f}°{iv(p.theta_r_interval, '.2f')}")
+    print(f"E           {p.efficiency:.3f}{iv(p.efficiency_interval, '.3f')}")
+    print(f"tan φ       {p.tan_phi:.3f}")
+    print(f"tan δ       {p.tan_delta:.3f}{iv(p.tan_delta_interval, '.3f')}   δ = {p.delta_deg:.2f}°{iv(p.delta_interval_deg, '.2f')}")
+    for n in p.notes:
+        print(f"note        {n}")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
