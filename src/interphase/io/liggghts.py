@@ -51,6 +51,21 @@ def read_dump_blocks(path: str | Path) -> list[tuple[int, pd.DataFrame]]:
     return out
 
 
+def _shear_start(meta: dict) -> int:
+    """Step at which shear starts: written by the deck to shear_start.txt once consolidation has
+    reached the target platen force (read into meta by `_meta`); n_consolidate in older decks."""
+    return int(meta.get("shear_start_step", meta["n_consolidate"]))
+
+
+def _meta(folder: Path) -> dict:
+    """engine.json plus the shear start step the engine wrote (shear_start.txt), if any."""
+    meta = json.loads((folder / "engine.json").read_text())
+    start = folder / "shear_start.txt"
+    if start.exists():
+        meta["shear_start_step"] = int(float(start.read_text().split()[0]))
+    return meta
+
+
 def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
     """Columns c_ID[first..last] looked up by name."""
     return df[[f"{prefix}[{i}]" for i in range(first, last + 1)]].to_numpy()
@@ -80,7 +95,7 @@ def _contacts_from_blocks(blocks, prefix: str, wall: bool, meta: dict) -> pd.Dat
         with np.errstate(invalid="ignore", divide="ignore"):
             nx, nz = branch[:, 0] / nrm, branch[:, 2] / nrm
         fx, fz = f2[:, 0], f2[:, 2]
-        t = (step - meta["n_consolidate"]) * meta["dt"]
+        t = (step - _shear_start(meta)) * meta["dt"]
         frames.append(pd.DataFrame({
             "snapshot": step, "time": t, "shear_disp": t * meta["shear_velocity"], "kind": kind,
             "id1": id1.astype(np.int64), "id2": id2.astype(np.int64),
@@ -96,7 +111,7 @@ def _contacts_from_blocks(blocks, prefix: str, wall: bool, meta: dict) -> pd.Dat
 
 def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
-    meta = meta or json.loads((folder / "engine.json").read_text())
+    meta = meta or _meta(folder)
     pairs = _contacts_from_blocks(read_dump_blocks(folder / "contacts_pair.dump"), "c_pc", False, meta)
     walls = _contacts_from_blocks(read_dump_blocks(folder / "contacts_wall.dump"), "c_wc", True, meta)
     out = pd.concat([pairs, walls], ignore_index=True)
@@ -110,10 +125,10 @@ def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     """history.txt → History. The first row after a `run` shows mesh forces doubled (ENGINES.md):
     dropped. surface_fx/fz: force ON the surface (lower box) [N]; normal_force: platen force [N]."""
     folder = Path(folder)
-    meta = meta or json.loads((folder / "engine.json").read_text())
+    meta = meta or _meta(folder)
     h = pd.read_csv(folder / "history.txt", sep=r"\s+")
     h = h.iloc[1:].reset_index(drop=True)
-    t = (h["step"].to_numpy() - meta["n_consolidate"]) * meta["dt"]
+    t = (h["step"].to_numpy() - _shear_start(meta)) * meta["dt"]
     return pd.DataFrame({
         "time": t, "shear_disp": t * meta["shear_velocity"],
         "surface_fx": h["surface_fx"], "surface_fz": h["surface_fz"],
@@ -123,11 +138,11 @@ def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
 
 def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
-    meta = meta or json.loads((folder / "engine.json").read_text())
+    meta = meta or _meta(folder)
     frames = []
     blocks = read_dump_blocks(folder / "particles.dump")
     for k, (step, df) in enumerate(blocks):
-        t = (step - meta["n_consolidate"]) * meta["dt"]
+        t = (step - _shear_start(meta)) * meta["dt"]
         frames.append(pd.DataFrame({"snapshot": k, "time": t, "shear_disp": t * meta["shear_velocity"],
                                     "id": df["id"].astype(np.int64), "x": df["x"], "z": df["z"],
                                     "vx": df["vx"], "vz": df["vz"], "radius": df["radius"]}))
@@ -136,5 +151,5 @@ def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame
 
 def read_folder(folder: str | Path) -> Results:
     folder = Path(folder)
-    meta = json.loads((folder / "engine.json").read_text())
+    meta = _meta(folder)
     return Results(read_contacts(folder, meta), read_history(folder, meta), read_particles(folder, meta))
