@@ -92,8 +92,8 @@ def test_tables_follow_the_contract(run):
 
 
 class TestLiggghtsReader(ReaderContract):
-    @pytest.fixture(scope="class")
-    def finished(self, run):
+    @pytest.fixture
+    def finished(self, run):           # `run` caches per session: the case runs once
         return run(tiny(friction_ps=0.2))
 
 
@@ -111,6 +111,71 @@ def test_summed_surface_contacts_equal_mesh_force(run):
         assert -row.fz == pytest.approx(hr.surface_fz, rel=1e-3)
         checked += 1
     assert checked >= 3
+
+
+def test_summed_sawtooth_contacts_equal_mesh_force_both_components(run):
+    """On a 45° saw-tooth with no damping (e = 1) the dumped contact forces are the applied ones:
+    summed particle–surface contacts equal the mesh force in x AND z to 1e−3 of the normal force.
+    With damping they differ by the damping term the dump re-evaluates (docs/liggghts.md)."""
+    _, res = run(tiny(profile=("sawtooth", dict(rt=1.0, sw=2.0, sr=0.0)), friction_ps=0.5, restitution=1.0))
+    c, h = res.contacts, res.history
+    ps = c[c.kind == "ps"].groupby("time")[["fx", "fz"]].sum()
+    checked = 0
+    for t, row in ps.iterrows():
+        hr = h.iloc[int(np.argmin(np.abs(h.time.to_numpy() - t)))]
+        if abs(hr.time - t) > 1e-12:
+            continue                      # the shear's first step has no history row (dropped)
+        scale = abs(hr.surface_fz)
+        assert abs(-row.fx - hr.surface_fx) < 1e-3 * scale
+        assert abs(-row.fz - hr.surface_fz) < 1e-3 * scale
+        checked += 1
+    assert checked >= 3
+    assert (c[c.kind == "ps"].nx < -0.5).any()     # faces, not a flat: the check covers inclined normals
+
+
+def test_platen_holds_the_normal_stress_during_shear(run):
+    """Consolidation ends only when the platen carries σ·L·t; shear then runs at that stress."""
+    case = tiny(friction_ps=0.2)
+    _, res = run(case)
+    target = case.normal_stress * case.box_length * case.thickness
+    f = res.history.normal_force.to_numpy()
+    assert abs(f.mean() - target) < 0.1 * target
+    assert abs(f[0] - target) < 0.1 * target
+
+
+def test_hostile_value_in_the_deck_is_refused(engine):
+    """A name carrying a newline and a `shell` command, or a NaN, stops the real template."""
+    from interphase.engines.render import environment
+    p = engine.parameters(tiny())["params"]
+    tpl = environment(engine.templates).get_template("interface_shear.in.j2")
+    assert "fix surf" in tpl.render(**p)
+    with pytest.raises(InputError):
+        tpl.render(**(p | {"moving": "surf\nshell rm -rf /"}))
+    with pytest.raises(InputError):
+        tpl.render(**(p | {"dt": float("nan")}))
+    with pytest.raises(InputError):
+        tpl.render(**(p | {"platen_force": "1\nshell rm -rf /"}))
+    with pytest.raises(Exception):      # StrictUndefined: a missing value is an error, not ""
+        tpl.render(**{k: v for k, v in p.items() if k != "dt"})
+
+
+def test_timeout_is_an_engine_error(tmp_path):
+    need_binary("liggghts")
+    from dataclasses import replace
+    eng = Liggghts()
+    eng = Liggghts(profile=replace(eng.profile, timeout=0.3))
+    eng.write_input(tiny(), tmp_path)
+    with pytest.raises(EngineError) as err:
+        eng.execute(tmp_path)
+    assert err.value.cause == "timeout"
+
+
+def test_classify_causes():
+    from interphase.engines.liggghts import classify
+    assert classify(0, "Loop time of 1 on 1 procs") is None
+    assert classify(1, "ERROR: Lost atoms: original 200 current 199") == "lost_atoms"
+    assert classify(-9, "") == "killed"
+    assert classify(1, "ERROR: Unknown command: shell") == "engine_error"
 
 
 def test_hostile_value_cannot_be_rendered(engine):

@@ -1,7 +1,8 @@
 """The Jinja environment every engine template is rendered with.
 
 StrictUndefined: a missing value is an error, never an empty string. Values enter a deck only
-through two filters: `num` (a finite int/float, written with repr precision) and `name` (an
+through three filters: `num` (a finite int/float, written with repr precision), `neg`
+(its negative) and `name` (an
 identifier matching ^[A-Za-z0-9_.-]+$). Anything else — a string carrying a newline and
 `shell rm -rf /`, a NaN, a list — is refused at render time, so a string can never add a command.
 """
@@ -29,6 +30,13 @@ def num(value) -> str:
     return str(value) if isinstance(value, int) else repr(float(value))
 
 
+def neg(value) -> str:
+    """−value as deck text, validated like `num` first (arithmetic in a template would run on an
+    unvalidated value: `(-x)|num` fails with a TypeError, not a located InputError)."""
+    num(value)
+    return num(-value)
+
+
 def name(value) -> str:
     """A validated identifier or file name (letters, digits, _ . -)."""
     if not isinstance(value, str) or not _NAME.match(value):
@@ -48,4 +56,5 @@ def environment(folder: str | Path) -> jinja2.Environment:
     )
     env.filters["num"] = num
     env.filters["name"] = name
+    env.filters["neg"] = neg
     return env
