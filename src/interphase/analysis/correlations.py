@@ -93,7 +93,10 @@ def _candidates(u_sorted: np.ndarray) -> np.ndarray:
     cand = np.unique(np.concatenate([ux, mids]))
     left = np.searchsorted(u_sorted, cand, side="left")              # points < c
     right = u_sorted.size - np.searchsorted(u_sorted, cand, side="right")   # points > c
-    cand = cand[(left >= MIN_SIDE) & (right >= MIN_SIDE)]
+    # and ≥ 2 distinct x on each side, or a side's slope is not identifiable
+    dleft = np.searchsorted(ux, cand, side="left")
+    dright = ux.size - np.searchsorted(ux, cand, side="right")
+    cand = cand[(left >= MIN_SIDE) & (right >= MIN_SIDE) & (dleft >= 2) & (dright >= 2)]
     if cand.size > N_GRID_MAX:
         # thin evenly but keep every data x: exact breakpoints at data points stay reachable
         keep = np.unique(np.linspace(0, cand.size - 1, N_GRID_MAX).round().astype(int))
