@@ -270,7 +270,29 @@ def _cmd_campaign_status(args) -> int:
 
 # ---- engine cross-check: crosscheck -----------------------------------------------------------
 def _add_crosscheck(sub) -> None:
-    pass
+    p = sub.add_parser("crosscheck", help="run a campaign with LIGGGHTS and YADE and compare them case by case")
+    p.add_argument("campaign", help="campaign file (TOML) with an optional [crosscheck] table of tolerances")
+    p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: the file's, else one per core)")
+    p.add_argument("--output", default=None, help="output folder (default: as in `campaign run`)")
+    p.add_argument("--rerun-failed", action="store_true", help="run failed cases again")
+    p.add_argument("--no-run", action="store_true", help="compare what has finished; run nothing")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_crosscheck)
+
+
+def _cmd_crosscheck(args) -> int:
+    """Exit 0 if every compared metric is within tolerance and every case finished, else 1."""
+    from interphase.campaign.crosscheck import crosscheck
+
+    report = crosscheck(args.campaign, jobs=args.jobs, output=args.output, rerun_failed=args.rerun_failed,
+                        run=not args.no_run, stream=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        _print_json(report.to_json())
+    else:
+        print(report.markdown())
+        print(f"tolerances: {report.tolerances}; table written to {report.output / 'crosscheck.csv'} and .md")
+        print("PASS" if report.passed else "FAIL (see the rows marked NO and the cases without a result)")
+    return 0 if report.passed else 1
 
 
 # ---- results: report, predict ------------------------------------------------------------------
