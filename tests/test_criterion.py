@@ -1,0 +1,115 @@
+"""The failure criterion chain and `campaign predict`."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from interphase.analysis.correlations import prepare_points
+from interphase.analysis.criterion import CriterionModel, predict, regular_flat_spacing
+from interphase.cli import main
+from interphase.errors import InputError
+from interphase.report.synthetic import synthetic_summaries
+from interphase.surface.profiles import sawtooth
+
+DEKTAK = "/work/shared/data/profiles/dektak-1.csv"
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_defaults_non_dilative_gives_tan_phimu_over_tan_phi():
+    m = CriterionModel.study_defaults(0.2)
+    p = predict(m, 0.2, math.nan, math.nan)
+    assert p.branch == "non-dilative"
+    assert p.theta_r_deg == pytest.approx(math.degrees(math.atan(0.2)))
+    assert p.efficiency == pytest.approx(0.2 / m.tan_phi)
+    assert p.tan_delta == pytest.approx(0.2)
+    assert any("STUDY DEFAULTS" in n for n in p.notes)
+
+
+def test_defaults_sawtooth_stronger_and_monotone_in_theta_a():
+    m = CriterionModel.study_defaults(0.2)
+    es = [predict(m, 0.2, a, a).efficiency for a in (0.0, 10.0, 20.0, 39.0)]
+    assert all(b >= a for a, b in zip(es, es[1:])) and es[-1] > es[0] * 2
+
+
+def test_regular_flat_spacing_rule():
+    d50 = 0.7e-3
+    s = sawtooth(1, 2, 1, d50=d50, length=0.03)
+    assert regular_flat_spacing(s.x, s.z, d50)[0]
+    s0 = sawtooth(1, 2, 0, d50=d50, length=0.03)
+    assert not regular_flat_spacing(s0.x, s0.z, d50)[0]
+    # irregular flats: spacing alternating 0.5 and 3 D50
+    x = np.cumsum([0, 0.7, 0.7, 0.35, 0.7, 0.7, 2.1, 0.7, 0.7, 0.35, 0.7, 0.7, 2.1]) * 1e-3
+    z = np.array([0, 0.7, 0, 0, 0.7, 0, 0, 0.7, 0, 0, 0.7, 0, 0]) * 1e-3
+    ok, why = regular_flat_spacing(x, z, d50)
+    assert not ok and "irregular" in why
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    return CriterionModel.from_points(prepare_points(synthetic_summaries(300, seed=5, noise_deg=0.5)),
+                                      "campaign synthetic", n_boot=40)
+
+
+def test_fitted_chain_uses_the_friction_fit_and_gives_intervals(fitted):
+    assert {0.05, 0.2, 0.5} <= set(k for k in fitted.theta_r if k != "all")
+    assert fitted.tan_phi == pytest.approx(0.55)
+    p = predict(fitted, 0.2, 20.0, 19.0)
+    truth_r = 11.31 + (35 - 11.31) * 20 / 40
+    assert p.theta_r_deg == pytest.approx(truth_r, abs=1.5)
+    lo, hi = p.theta_r_interval
+    assert lo <= p.theta_r_deg <= hi
+    assert p.efficiency_interval[0] <= p.efficiency <= p.efficiency_interval[1]
+    assert p.tan_delta == pytest.approx(p.efficiency * 0.55)
+    q = predict(fitted, 0.3, 20.0, 19.0)       # no 0.3 fit: the pooled one, said so
+    assert any("pooled" in n for n in q.notes)
+
+
+def test_fitted_flat_spaced_branch(fitted):
+    p = predict(fitted, 0.2, 42.0, 30.0, flat_spaced=True)
+    assert p.branch.startswith("flat-spaced") and p.filter == 90
+    truth = (0.6 + 0.01 * (120 - 115)) * 30.0
+    assert p.theta_r_deg == pytest.approx(truth, abs=2.0)
+
+
+def test_refuses_theta_a_outside_fitted_range(fitted):
+    with pytest.raises(InputError, match="outside the fitted range"):
+        predict(fitted, 0.2, 75.0, 75.0)
+
+
+def test_cli_predict_dektak_is_non_dilative(capsys):
+    code, out, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["branch"] == "non-dilative" and d["source"] == "study defaults"
+    assert d["efficiency"] == pytest.approx(math.tan(math.atan(0.2)) / d["tan_phi"])
+    code, text, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um")
+    assert code == 0 and "study defaults" in text.lower() and "STUDY DEFAULTS" in text
+
+
+def test_cli_predict_sawtooth_gives_higher_e(capsys, tmp_path):
+    prof = tmp_path / "saw45.txt"
+    assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
+    capsys.readouterr()
+    _, out_flat, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--json")
+    assert code == 0, err
+    saw, flat = json.loads(out), json.loads(out_flat)
+    assert saw["branch"].startswith("dilative") and saw["theta_a_deg"] == pytest.approx(39.3, abs=0.5)
+    assert saw["efficiency"] > 2 * flat["efficiency"]
+
+
+@pytest.mark.parametrize("argv, where", [
+    (["--d50", "0", "--friction", "0.2"], "--d50"),
+    (["--d50", "0.7", "--friction", "-1"], "--friction"),
+    (["--d50", "0.7", "--friction", "0.2", "--tan-phi", "0"], "--tan-phi"),
+])
+def test_cli_predict_bad_input_exit_2(capsys, argv, where):
+    code, _, err = _run(capsys, "predict", DEKTAK, "--units", "um", *argv)
+    assert code == 2 and where in err and "Traceback" not in err
