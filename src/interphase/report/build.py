@@ -115,6 +115,11 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     """Everything `campaign report` writes, from a summaries table (CampaignStore.summaries() shape).
     `store` (for curves, networks, provenance) and `campaign` (input tables, Fig. 6.6) are optional."""
     out = Path(out)
+    lab_df = None
+    if lab is not None:            # a bad lab file fails before anything is written
+        from interphase.report.lab import read_lab
+
+        lab_df = read_lab(lab)
     tdir, fdir = out / "tables", out / "figures"
     tdir.mkdir(parents=True, exist_ok=True)
     fdir.mkdir(parents=True, exist_ok=True)
@@ -138,11 +143,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         tables += T.input_tables(campaign)
     tables += T.results_tables(points)
     tables.append(T.coefficient_table(fits))
-    lab_df = None
-    if lab is not None:
-        from interphase.report.lab import compare, read_lab
+    if lab_df is not None:
+        from interphase.report.lab import compare
 
-        lab_df = read_lab(lab)
         fitted = CriterionModel.from_points(points, f"campaign {campaign.name if campaign else 'report'}",
                                             n_boot=min(n_boot, 99), seed=seed)
         usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)

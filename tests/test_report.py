@@ -1,0 +1,158 @@
+"""`campaign report`: every table and figure, LaTeX that parses as a table fragment, the HTML page,
+"no fit" instead of a crash, the lab comparison — on a synthetic index and on real quick-campaign
+output when it is there."""
+
+import re
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from interphase.campaign.schema import load_campaign
+from interphase.cli import main
+from interphase.report.build import report_from_summaries
+from interphase.report.synthetic import synthetic_summaries
+
+ROOT = Path(__file__).resolve().parents[1]
+LAB = ROOT / "tests" / "data" / "lab_example.csv"
+FIGS = ("fig6_3", "fig6_5", "fig6_6", "fig6_7", "fig6_8", "fig6_9", "fig6_10a")
+
+
+def check_latex(text: str) -> None:
+    """A tabular fragment: balanced begin/end, booktabs rules in order, equal column count per row."""
+    assert text.count(r"\begin{tabular}") == 1 == text.count(r"\end{tabular}")
+    m = re.search(r"\\begin\{tabular\}\{([lrc]+)\}", text)
+    assert m, "no column spec"
+    ncol = len(m.group(1))
+    body = text[m.end():text.index(r"\end{tabular}")]
+    assert body.index(r"\toprule") < body.index(r"\midrule") < body.index(r"\bottomrule")
+    rows = [r for r in body.split("\\\\") if r.strip() and "rule" not in r.split("\n")[-1] or "&" in r]
+    for r in body.split("\\\\"):
+        line = r.replace(r"\toprule", "").replace(r"\midrule", "").replace(r"\bottomrule", "").strip()
+        if not line:
+            continue
+        if line.startswith(r"\multicolumn"):
+            assert line.startswith(r"\multicolumn{%d}" % ncol)
+            continue
+        assert len(re.findall(r"(?<!\\)&", line)) == ncol - 1, line
+    assert rows
+    # braces balance (escaped ones excluded)
+    plain = re.sub(r"\\[{}]", "", text)
+    assert plain.count("{") == plain.count("}")
+    assert "interphase-dem" in text          # provenance note
+
+
+def check_outputs(folder: Path, groups, lab: bool = False) -> None:
+    for stem in FIGS + (("fig6_10b_lab",) if lab else ()):
+        for ext in ("png", "pdf"):
+            p = folder / "figures" / f"{stem}.{ext}"
+            assert p.is_file() and p.stat().st_size > 1000, p
+    tables = ["table_6_1_inputs", "correlations"] + [f"results_{g}" for g in groups] + (["lab_comparison"] if lab else [])
+    for t in tables:
+        for ext in ("csv", "md", "tex"):
+            p = folder / "tables" / f"{t}.{ext}"
+            assert p.is_file() and p.stat().st_size > 0, p
+        check_latex((folder / "tables" / f"{t}.tex").read_text())
+    html = (folder / "index.html").read_text()
+    links = re.findall(r'(?:href|src)="([^"]+)"', html)
+    assert links and all((folder / link).is_file() for link in links)
+    for stem in FIGS:
+        assert f"figures/{stem}.png" in html
+
+
+@pytest.fixture(scope="module")
+def synthetic_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("rep")
+    summ = synthetic_summaries(150, seed=11)
+    res = report_from_summaries(summ, out, campaign=load_campaign(ROOT / "campaigns" / "group4.toml"), lab=LAB,
+                                n_boot=30)
+    return out, res, summ
+
+
+def test_synthetic_report_writes_everything(synthetic_report):
+    out, res, summ = synthetic_report
+    groups = sorted(summ.loc[summ.test == "interface", "group"].unique())
+    check_outputs(out, groups, lab=True)
+    assert (out / "tables" / "table_6_2_random.tex").is_file()      # group4: Table 6.2 style
+    assert all(p.is_file() for p in res.files)
+
+
+def test_input_table_is_generated_from_the_campaign(synthetic_report):
+    out = synthetic_report[0]
+    t62 = pd.read_csv(out / "tables" / "table_6_2_random.csv")
+    assert list(t62.columns) == ["variable", "A", "B", "C", "D", "E", "F", "G"]   # Table 6.2
+    au = t62.set_index("variable").loc["Au/D50 [-]"]
+    assert list(au) == [1, 2, 2, 4, 2, 4, 4]
+
+
+def test_coefficients_table_has_fits_and_intervals(synthetic_report):
+    out = synthetic_report[0]
+    co = pd.read_csv(out / "tables" / "correlations.csv")
+    e = co[(co.figure == "6.10a") & (co["slice"] == "all")].iloc[0]
+    assert 27 <= e["c"] <= 33 and e["n"] == 150
+    assert e["c 95% (profile)"].startswith("[")
+
+
+def test_lab_comparison_table(synthetic_report):
+    out = synthetic_report[0]
+    lab = pd.read_csv(out / "tables" / "lab_comparison.csv")
+    assert len(lab) == 6
+    assert lab["δ predicted [°]"].notna().all() and lab["δ measured [°]"].notna().all()
+    assert (lab["tan φμ [-]"].iloc[:4] == 0.1).all() and (lab["tan φμ [-]"].iloc[4:] == 0.2).all()
+
+
+def test_too_few_points_draw_and_say_no_fit(tmp_path):
+    res = report_from_summaries(synthetic_summaries(4, seed=1), tmp_path, n_boot=0)
+    co = pd.read_csv(tmp_path / "tables" / "correlations.csv")
+    assert co["note"].str.contains("no fit: n = .* < 7", regex=True).all()
+    assert (tmp_path / "figures" / "fig6_8.png").stat().st_size > 1000
+    check_latex((tmp_path / "tables" / "correlations.tex").read_text())
+    assert not res.warnings or all(isinstance(w, str) for w in res.warnings)
+
+
+def test_empty_index_still_writes_a_report(tmp_path):
+    summ = synthetic_summaries(3, seed=1).iloc[0:0]
+    res = report_from_summaries(summ, tmp_path, n_boot=0)
+    assert (tmp_path / "index.html").is_file()
+    assert any("no finished interface case" in w for w in res.warnings)
+
+
+def test_bad_lab_file_names_the_column(tmp_path):
+    bad = tmp_path / "lab.csv"
+    bad.write_text("theta_a_deg,material\n10,glass beads\n")
+    code = main(["report", str(ROOT / "campaigns" / "quick.toml"), "--out", str(tmp_path / "r"), "--lab", str(bad)]) \
+        if (ROOT / "runs" / "quick" / "index.sqlite").exists() else None
+    from interphase.errors import InputError
+    from interphase.report.lab import read_lab
+    with pytest.raises(InputError, match="tan_delta or an efficiency"):
+        read_lab(bad)
+    if code is not None:
+        assert code == 2
+    bad.write_text("theta_a_deg,tan_delta,material\n10,0.3,granite dust\n")
+    with pytest.raises(InputError, match="friction"):
+        read_lab(bad)
+
+
+def test_cli_report_without_results_exit_2(tmp_path, capsys):
+    toml = tmp_path / "c.toml"
+    text = (ROOT / "campaigns" / "quick.toml").read_text().replace('name = "quick"', 'name = "nothing_here"')
+    toml.write_text(text + f'\n')
+    code = main(["report", str(toml), "--out", str(tmp_path / "r")])
+    err = capsys.readouterr().err
+    assert code == 2 and "campaign run" in err and "Traceback" not in err
+
+
+QUICK = ROOT / "runs" / "quick"
+
+
+@pytest.mark.skipif(not (QUICK / "index.sqlite").exists(), reason="quick campaign has not run (make run)")
+def test_real_quick_campaign_report(tmp_path, capsys):
+    code = main(["report", str(ROOT / "campaigns" / "quick.toml"), "--out", str(tmp_path), "--lab", str(LAB),
+                 "--bootstrap", "20"])
+    assert code == 0, capsys.readouterr().err
+    check_outputs(tmp_path, ["quick"], lab=True)
+    assert list((tmp_path / "figures").glob("curves_*.png"))
+    assert list((tmp_path / "figures").glob("network_*.png"))
+    co = pd.read_csv(tmp_path / "tables" / "correlations.csv")
+    assert co["note"].str.startswith("no fit").all()       # 4 interface cases: nothing to fit, said so
