@@ -67,8 +67,11 @@ def test_fitted_chain_uses_the_friction_fit_and_gives_intervals(fitted):
     assert lo <= p.theta_r_deg <= hi
     assert p.efficiency_interval[0] <= p.efficiency <= p.efficiency_interval[1]
     assert p.tan_delta == pytest.approx(p.efficiency * 0.55)
-    q = predict(fitted, 0.3, 20.0, 19.0)       # no 0.3 fit: the pooled one, said so
-    assert any("pooled" in n for n in q.notes)
+    q = predict(fitted, 0.3, 0.0, 0.0)          # between the 0.2 and 0.5 fits: interpolated, said so
+    assert any("interpolated" in n for n in q.notes)
+    assert q.theta_r_deg == pytest.approx(math.degrees(math.atan(0.3)), abs=1.5)   # intercept ≈ φμ
+    r = predict(fitted, 0.9, 20.0, 19.0)        # outside every fitted friction: the pooled fit, said so
+    assert any("pooled" in n for n in r.notes)
 
 
 def test_fitted_flat_spaced_branch(fitted):

@@ -173,10 +173,36 @@ class Prediction:
         return d
 
 
+class _Blend:
+    """θr(θa) between the fits of two bracketing frictions, linear in φμ = atan(μ) — the intercept
+    ≈ φμ and the slope falls steadily with friction (Fig. 6.8), so interpolating both is the least
+    assumption."""
+
+    def __init__(self, f_lo, f_hi, w: float):
+        self.f_lo, self.f_hi, self.w = f_lo, f_hi, w
+        self.x_range = (max(f_lo.x_range[0], f_hi.x_range[0]), min(f_lo.x_range[1], f_hi.x_range[1]))
+
+    def predict(self, x):
+        return (1 - self.w) * self.f_lo.predict(x) + self.w * self.f_hi.predict(x)
+
+    def predict_interval(self, x):
+        a, b = self.f_lo.predict_interval(x), self.f_hi.predict_interval(x)
+        return ((1 - self.w) * a[0] + self.w * b[0], (1 - self.w) * a[1] + self.w * b[1])
+
+
 def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
-    for k, f in model.theta_r.items():
-        if k != "all" and abs(float(k) - friction) <= 1e-9:
+    per = {float(k): f for k, f in model.theta_r.items() if k != "all"}
+    for k, f in per.items():
+        if abs(k - friction) <= 1e-9:
             return f
+    below = [k for k in per if k < friction]
+    above = [k for k in per if k > friction]
+    if below and above:
+        lo, hi = max(below), min(above)
+        w = (math.atan(friction) - math.atan(lo)) / (math.atan(hi) - math.atan(lo))
+        notes.append(f"no θa–θr fit for friction {friction:g}: interpolated between the fits for {lo:g} and {hi:g} "
+                     "(linear in φμ)")
+        return _Blend(per[lo], per[hi], w)
     if "all" in model.theta_r:
         notes.append(f"no θa–θr fit for friction {friction:g}: the pooled fit (all frictions) is used")
         return model.theta_r["all"]

@@ -183,7 +183,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     add("Fig. 6.10a: efficiency vs θr", F.correlation_figure(points, fits, ["fig6_10a"], "fig6_10a", fdir,
                                                              "Fig. 6.10a: failure criterion E(θr)"))
     if lab_df is not None:
-        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir))
+        tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").median()
+        tp = float(tp) if math.isfinite(tp) else CriterionModel.study_defaults(0.0).tan_phi
+        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir, tp))
     if store is not None:
         allrows = summaries.copy()
         allrows["group"] = allrows.get("group", "").astype(str)

@@ -56,7 +56,7 @@ def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bo
         c = colour.get(mu, "0.3")
         ax.scatter(g["_x"], g["_y"], s=22, marker=marker.get(grp, "o"), edgecolors=c,
                    facecolors=c if grad == "poly" else "none", linewidths=1.0,
-                   label=f"{grp}, μ={mu:g}, {grad}" if legend else None)
+                   label=None)
         n += len(g)
     return n
 
@@ -93,16 +93,18 @@ def correlation_panel(ax, points, spec_key: str, fit_results, colour, marker, le
     ax.grid(alpha=0.3)
 
 
-def _legend(fig, axes) -> None:
-    handles, labels = {}, []
-    for ax in np.atleast_1d(axes).ravel():
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in handles:
-                handles[lab] = h
-    if handles:
-        labs = list(handles)[:24]
-        fig.legend([handles[k] for k in labs], labs, loc="lower center", ncol=min(4, len(labs)), fontsize=7,
-                   frameon=False)
+def _legend(fig, axes, points=None) -> None:
+    """One key for the whole figure: colour = friction, marker = group, filled = poly-disperse."""
+    from matplotlib.lines import Line2D
+
+    if points is None or points.empty:
+        return
+    colour, marker = _styles(points)
+    h = [Line2D([], [], ls="", marker="o", color=c, label=f"tan φμ = {mu:g}") for mu, c in colour.items()]
+    h += [Line2D([], [], ls="", marker=m, color="0.35", mfc="none", label=str(g)) for g, m in marker.items()]
+    h += [Line2D([], [], ls="", marker="o", color="0.35", mfc="none", label="mono-disperse"),
+          Line2D([], [], ls="", marker="o", color="0.35", label="poly-disperse")]
+    fig.legend(handles=h, loc="lower center", ncol=min(6, len(h)), fontsize=7, frameon=False)
 
 
 def correlation_figure(points, fit_results, keys, stem: str, folder: Path, suptitle: str) -> list[Path]:
@@ -112,14 +114,13 @@ def correlation_figure(points, fit_results, keys, stem: str, folder: Path, supti
     fig, axes = plt.subplots(nrow, ncol, figsize=(6.2 * ncol, 4.6 * nrow + 1.2), squeeze=False)
     for ax, key in zip(axes.ravel(), keys):
         correlation_panel(ax, points, key, fit_results, colour, marker)
-        ax.legend(fontsize=7, loc="lower right", handles=[h for h, lab in zip(*ax.get_legend_handles_labels())
-                                                          if lab.startswith("fit")] or None) if any(
-            lab.startswith("fit") for lab in ax.get_legend_handles_labels()[1]) else None
+        if ax.get_legend_handles_labels()[0]:       # only fit lines carry labels
+            ax.legend(fontsize=7, loc="best")
     for ax in axes.ravel()[len(keys):]:
         ax.set_visible(False)
     fig.suptitle(suptitle, fontsize=11)
-    _legend(fig, axes)
-    fig.tight_layout(rect=(0, 0.12 if nrow == 1 else 0.08, 1, 0.96))
+    _legend(fig, axes, points)
+    fig.tight_layout(rect=(0, 0.1 if nrow == 1 else 0.06, 1, 0.96))
     return save(fig, folder, stem)
 
 
@@ -137,7 +138,7 @@ def figure_6_5(points, folder: Path) -> list[Path]:
         if n == 0:
             ax.text(0.5, 0.5, f"no points with both Rnc and {y}", transform=ax.transAxes, ha="center", color="C3")
     fig.suptitle("Fig. 6.5: strength vs normalised roughness Rnc(D50)")
-    _legend(fig, axes)
+    _legend(fig, axes, points)
     fig.tight_layout(rect=(0, 0.12, 1, 0.95))
     return save(fig, folder, "fig6_5")
 
@@ -193,20 +194,26 @@ def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder
     return save(fig, folder, stem)
 
 
-def lab_figure(points, lab: pd.DataFrame, folder: Path) -> list[Path]:
-    """Fig. 6.10b style: simulated and measured peak efficiency (or tan δ) against θa (> 92°)."""
+def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[Path]:
+    """Fig. 6.10b style: simulated and measured peak efficiency against θa (> 92°); a lab row with only
+    tan δ is converted with its own tan_phi, else `tan_phi` (the campaign's or the default's). Without
+    any finite tan φ the figure shows tan δ instead."""
     colour, marker = _styles(points)
-    y = "efficiency" if lab["efficiency"].notna().any() else "peak_stress_ratio"
+    tp = lab["tan_phi"].fillna(tan_phi)
+    lab_e = lab["efficiency"].fillna(lab["tan_delta"] / tp)
+    use_e = lab_e.notna().any() and points.get("efficiency", pd.Series(dtype=float)).notna().any()
+    y = "efficiency" if use_e else "peak_stress_ratio"
+    lab_y = lab_e if use_e else lab["tan_delta"].fillna(lab["efficiency"] * tp)
     fig, ax = plt.subplots(figsize=(8, 5.6))
     scatter(ax, points, "theta_a_deg_92", y, colour, marker)
-    lab_y = lab["efficiency"] if y == "efficiency" else lab["tan_delta"]
     for i, (mat, g) in enumerate(lab.assign(_y=lab_y).groupby("material", sort=True)):
-        ax.scatter(g["theta_a_deg"].fillna(0.0), g["_y"], s=60, marker="*", color=f"C{(i + 5) % 10}",
-                   edgecolors="k", linewidths=0.5, label=f"lab: {mat}", zorder=5)
+        ax.scatter(g["theta_a_deg"].fillna(0.0), g["_y"], s=110, marker="*", color=f"C{(i + 6) % 10}",
+                   edgecolors="k", linewidths=0.6, label=f"lab: {mat}", zorder=5)
     ax.set_xlabel("θa, filter > 92° [° from vertical] (non-dilative at 0)")
-    ax.set_ylabel("efficiency E [-]" if y == "efficiency" else "peak stress ratio tan δ [-]")
-    ax.set_title("Fig. 6.10b: laboratory data with the simulations", fontsize=10)
+    ax.set_ylabel("efficiency E [-]" if use_e else "peak stress ratio tan δ [-]")
+    ax.set_title("Fig. 6.10b: laboratory data (stars) with the simulations", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
+    _legend(fig, ax, points)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     return save(fig, folder, "fig6_10b_lab")
