@@ -80,6 +80,17 @@ def _d50_m(value: float) -> float:
     return value * 1e-3
 
 
+def _output_path(path: str) -> str:
+    """Refuse an output file whose folder does not exist before any work is done."""
+    from pathlib import Path
+
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise InputError(f"folder {str(parent)!r} does not exist", where=f"-o {path}",
+                         fix="create the folder first or write somewhere else")
+    return path
+
+
 def _load_measured(path: str, units, cutoff_mm=None):
     from interphase.surface.readers import prepare_measured, read_profile
 
@@ -124,7 +135,7 @@ def _cmd_profile_make(args) -> int:
         prof = random_profile(args.au, args.ar, args.rtmax, d50=d50, length=length, seed=args.seed)
     else:
         prof = sawtooth(args.rt, args.sw, getattr(args, "sr", 0.0), d50=d50, length=length)
-    np.savetxt(args.output, np.column_stack([prof.x, prof.z]) * 1e3, fmt="%.9g",
+    np.savetxt(_output_path(args.output), np.column_stack([prof.x, prof.z]) * 1e3, fmt="%.9g",
                header=f"x_mm z_mm  {prof.name} D50={args.d50:g}mm", comments="# ")
     print(f"wrote {args.output} ({prof.x.size} vertices, {prof.length * 1e3:.3f} mm)")
     return 0
@@ -133,7 +144,7 @@ def _cmd_profile_make(args) -> int:
 def _cmd_profile_plot(args) -> int:
     from interphase.surface.plot import plot_profile
 
-    out = args.output or (args.profile.rsplit(".", 1)[0] + ".png")
+    out = _output_path(args.output or (args.profile.rsplit(".", 1)[0] + ".png"))
     plot_profile(_load_measured(args.profile, args.units), _d50_m(args.d50), out, args.filter)
     print(f"wrote {out}")
     return 0

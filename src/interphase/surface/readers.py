@@ -6,6 +6,8 @@ Formats:
     Units come from the column names (um/mm) unless given.
   - Plain two-column text/CSV: comma, semicolon, tab or spaces; leading header lines that are not
     numbers are skipped; '#' starts a comment. Units as given (the caller's option).
+x must not decrease; rows with the same x (lateral positions rounded by the instrument) are merged
+into one point at the mean of their z.
 Every failure is an InputError naming the file and, where it applies, the line.
 """
 
@@ -73,10 +75,15 @@ def read_profile(path: str | Path, units: str | None = None) -> Profile:
             i = int(np.argmax(np.isinf(arr)))
             raise InputError(f"line {numbers[i]}: infinite {name}", where=where, fix="remove or repair that row")
     step = np.diff(x)
-    if np.any(step <= 0):
-        i = int(np.argmax(step <= 0)) + 1
-        raise InputError(f"line {numbers[i]}: x = {x[i]:g} does not increase (previous {x[i-1]:g})",
-                         where=where, fix="x must increase strictly down the file; sort it or drop repeats")
+    if np.any(step < 0):
+        i = int(np.argmax(step < 0)) + 1
+        raise InputError(f"line {numbers[i]}: x = {x[i]:g} decreases (previous {x[i-1]:g})",
+                         where=where, fix="x must not decrease down the file; sort the rows")
+    if np.any(step == 0):
+        # instruments that round the lateral position (Dektak: to 0.1 µm) can write one x twice; the
+        # stylus read that position twice, so its height is the mean of the readings
+        x, group = np.unique(x, return_inverse=True)
+        z = np.bincount(group, weights=z) / np.bincount(group)
     if x.size < 3:
         raise InputError(f"only {x.size} data rows", where=where, fix="a profile needs at least 3 points")
     return Profile(x * factor, z * factor, periodic=False, name=path.stem)
