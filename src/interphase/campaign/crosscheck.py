@@ -111,12 +111,22 @@ class CrosscheckReport:
     missing: list = field(default_factory=list)   # (label, engine, status) of cases without a summary
 
     @property
-    def passed(self) -> bool:
-        checked = self.table.dropna(subset=["passed"])
-        return not self.missing and bool(checked["passed"].all())
-
-    def markdown(self) -> str:
+    def judged(self) -> pd.DataFrame:
+        """The rows that decide pass/fail: seed means where cases repeat over seeds, else single cases."""
         t = self.table
+        if (t["seeds"] > 1).any():
+            return t[t["seeds"] > 1]
+        return t
+
+    @property
+    def passed(self) -> bool:
+        checked = self.judged.dropna(subset=["passed"])
+        return not self.missing and bool(checked["passed"].astype(bool).all())
+
+    def markdown(self, all_rows: bool = False) -> str:
+        """The deciding rows (seed means if any; `all_rows` adds every single case) as Markdown;
+        values are mean ± sd over seeds where there are several."""
+        t = self.table if all_rows else self.judged
         head = ("| case | metric | LIGGGHTS | YADE | abs diff | rel diff | tolerance | pass |\n"
                 "|---|---|---|---|---|---|---|---|\n")
         rows = []
@@ -125,7 +135,7 @@ class CrosscheckReport:
                 f"{r.tolerance:.0%} rel" if r.kind == "rel" else f"{r.tolerance:g} {r.unit} abs")
             ok = "" if r.passed is None or (isinstance(r.passed, float) and math.isnan(r.passed)) else (
                 "yes" if r.passed else "**NO**")
-            rows.append(f"| {r.case} | {r.metric} | {_fmt(r.liggghts)} | {_fmt(r.yade)} | {_fmt(r.abs_diff)} | "
+            rows.append(f"| {r.case} | {r.metric} | {_fmt(r.liggghts, r.liggghts_sd)} | {_fmt(r.yade, r.yade_sd)} | {_fmt(r.abs_diff)} | "
                         f"{_fmt_pct(r.rel_diff)} | {tol} | {ok} |")
         miss = "".join(f"\n- {lab} ({eng}): {st}" for lab, eng, st in self.missing)
         return head + "\n".join(rows) + ("\n\nCases without a result:" + miss if miss else "") + "\n"
@@ -136,9 +146,11 @@ class CrosscheckReport:
                 "rows": self.table.astype(object).where(self.table.notna(), None).to_dict(orient="records")}
 
 
-def _fmt(v) -> str:
+def _fmt(v, sd=None) -> str:
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "—"
+    if sd is not None and isinstance(sd, float) and math.isfinite(sd):
+        return f"{v:.4g} ± {sd:.2g}"
     return f"{v:.4g}"
 
 
@@ -165,9 +177,44 @@ def compare(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolera
                 passed = bool((rel if kind == "rel" else diff) <= tol)
             rows.append({"case": label, "role": roles.get(label, ""), "metric": key, "unit": unit, "kind": kind,
                          "liggghts": va, "yade": vb, "abs_diff": diff, "rel_diff": rel, "tolerance": tol,
-                         "passed": passed})
+                         "passed": passed, "seeds": int(a.get("_seeds", 1)),
+                         "liggghts_sd": _num(a.get(key + "_sd")), "yade_sd": _num(b.get(key + "_sd"))})
     return pd.DataFrame(rows, columns=["case", "role", "metric", "unit", "kind", "liggghts", "yade", "abs_diff",
-                                       "rel_diff", "tolerance", "passed"])
+                                       "rel_diff", "tolerance", "passed", "seeds", "liggghts_sd", "yade_sd"])
+
+
+_SEED = re.compile(r"-s(-?\d+)$")
+
+
+def seed_means(summaries: dict[str, dict[str, dict]], roles: dict[str, str]):
+    """Cases that differ only in their packing seed (labels ending -s<seed>) → per-engine means over
+    the seeds that BOTH engines finished, as pseudo-cases "<label> [n seeds]" (with sd columns).
+
+    Why: single 200-grain cases scatter ~10 % between seeds (ENGINES.md); engines are compared on
+    seed means, and the per-seed rows stay in the table for reference. Empty if no label repeats."""
+    groups: dict[str, list[str]] = {}
+    for label in summaries:
+        m = _SEED.search(label.rstrip(")"))
+        if m:
+            base = _SEED.sub("", label.rstrip(")")) + (")" if label.endswith(")") else "")
+            groups.setdefault(base, []).append(label)
+    means, mroles = {}, {}
+    for base, labels in groups.items():
+        both = [lab for lab in labels if set(ENGINES) <= set(summaries[lab])]
+        if len(labels) < 2 or not both:
+            continue
+        name = f"{base} [{len(both)} seeds]"
+        mroles[name] = roles.get(labels[0], "")
+        means[name] = {}
+        for eng in ENGINES:
+            row = {}
+            for key, *_ in METRICS:
+                vals = pd.Series([_num(summaries[lab][eng].get(key)) for lab in both], dtype=float)
+                row[key] = float(vals.mean()) if vals.notna().any() else math.nan
+                row[key + "_sd"] = float(vals.std()) if vals.notna().sum() > 1 else math.nan
+            row["_seeds"] = len(both)
+            means[name][eng] = row
+    return means, mroles
 
 
 def _num(v) -> float:
@@ -207,6 +254,9 @@ def crosscheck(path, *, jobs: int | None = None, output=None, rerun_failed: bool
             continue
         summaries.setdefault(label, {})[p.engine] = data.get("row", data)
     table = compare(summaries, roles, tol)
+    means, mroles = seed_means(summaries, roles)
+    if means:
+        table = pd.concat([table, compare(means, mroles, tol)], ignore_index=True)
     report = CrosscheckReport(campaign.name, campaign.output, tol, table, missing)
     campaign.output.mkdir(parents=True, exist_ok=True)
     table.to_csv(campaign.output / "crosscheck.csv", index=False)
