@@ -21,7 +21,8 @@ from interphase.case import Case
 from interphase.engines.liggghts import Liggghts
 from interphase.surface.spec import ProfileSpec
 
-OUTPUT_LINES = re.compile(r"^(compute |dump|fix hist|variable |thermo_style|thermo )", re.M)
+# the consolidation loop's variables (pfc, kc) stay: they steer the run, not its output
+OUTPUT_LINES = re.compile(r"^(compute |dump|fix hist|variable (?!pfc |kc )|thermo_style|thermo )", re.M)
 
 
 def loop_rate(log: Path, n_grains: int) -> float:
