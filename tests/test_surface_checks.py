@@ -38,6 +38,30 @@ def test_code_matches_closed_form_away_from_the_table(alpha, h):
     assert theta_a(p, D50, 92).theta_a_deg == pytest.approx(closed_form_psi(alpha, h, 2.0), abs=0.05)
 
 
+def spaced_closed_form_psi(alpha_deg, h, sr, eps_deg, r=0.5):
+    """Group 2 (flat spacing sr ≥ 2r·tan(α/2), D50 units), derived like METHODS.md §3: the feet are
+    concave corners, so the trace has cusps there; each face run shortens to Lf' = h/sinα − r·tan(α/2)
+    and the flat run is Lflat = sr − 2r·tan(α/2) at ψ = 0, kept only by the ≥ 90° filter:
+    ψa = ½·arg(e^{iα}[Lf'·e^{iα} + r·sin(α−ε)·e^{iε}] + [ε = 0]·Lflat)."""
+    a, e = math.radians(alpha_deg), math.radians(eps_deg)
+    t = math.tan(a / 2)
+    lf, lflat = h / math.sin(a) - r * t, sr - 2 * r * t
+    s = complex(math.cos(a), math.sin(a)) * (lf * complex(math.cos(a), math.sin(a))
+                                             + r * math.sin(a - e) * complex(math.cos(e), math.sin(e)))
+    if eps_deg == 0:
+        s += lflat
+    return math.degrees(math.atan2(s.imag, s.real)) / 2
+
+
+@pytest.mark.parametrize("alpha,h,sr", [(45, 1, 1), (45, 1, 5), (30, 1, 3), (60, 1, 2)])
+def test_flat_spaced_sawtooth_matches_its_closed_form(alpha, h, sr):
+    p = sawtooth(h, 2 * h / math.tan(math.radians(alpha)), sr, d50=D50, periods=2)
+    psi90, psi92 = theta_a(p, D50, 90).theta_a_deg, theta_a(p, D50, 92).theta_a_deg
+    assert psi90 == pytest.approx(spaced_closed_form_psi(alpha, h, sr, 0.0), abs=0.05)
+    assert psi92 == pytest.approx(spaced_closed_form_psi(alpha, h, sr, 2.0), abs=0.05)
+    assert psi90 < psi92 - 5   # the flats pull the ≥ 90° reading toward vertical
+
+
 # ---- the fast dilation is the naive max over shifts, exactly ---------------------------------
 def naive_dilation(z, R, periodic):
     K = int(math.floor(R))
