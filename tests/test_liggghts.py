@@ -153,7 +153,7 @@ def test_side_walls_clear_grains_trapped_in_valleys():
     assert wall_gap(flat, dmin, dmax) == pytest.approx(0.05 * dmin)
     # largest grain in a 45° valley of depth D50: top at r/sin45 + r − Rt above the peaks
     r = dmax / 2
-    assert wall_gap(saw, dmin, dmax) == pytest.approx(r * np.sqrt(2) + r - d50 + 0.05 * dmin, rel=1e-3)
+    assert wall_gap(saw, dmin, dmax) == pytest.approx(r * np.sqrt(2) + r - d50 + 0.05 * dmin, rel=1e-2)
 
 
 def test_platen_holds_the_normal_stress_during_shear(run):
