@@ -11,7 +11,8 @@ RSS — so data with an exact breakpoint at a data x return that x exactly.
 Breakpoint intervals: (1) profile likelihood — every c with
 RSS(c) ≤ RSSmin·[1 + F0.95(1, n−p)/(n−p)], p = linear coefficients + 1 (c itself); (2) a seeded
 residual bootstrap (refit on fitted + resampled centred residuals; percentile interval), which also
-gives the coefficient intervals.
+gives the coefficient intervals. Bootstrap refits refine c on a vectorised 64-point grid within the
+same bracket instead of minimize_scalar (speed; see _fit_fast).
 Rows are sorted by (x, y) and x is shifted to start at 0 before fitting, so a fit is invariant to row
 order and shifting x shifts c by the same amount.
 """
@@ -74,8 +75,13 @@ def _lstsq_many(u: np.ndarray, y: np.ndarray, c: np.ndarray, model: str) -> tupl
         ym = Puy + c * Sy                      # Σ y·min(u, c)
         XtX = np.stack([np.stack([np.full_like(c, n), m1], -1), np.stack([m1, m2], -1)], -2)
         Xty = np.stack([np.full_like(c, sy), ym], -1)
-    beta = np.einsum("cij,cj->ci", np.linalg.pinv(XtX), Xty)
-    rss = np.maximum(float(y @ y) - np.einsum("ci,ci->c", beta, Xty), 0.0)
+    # batched solve (pinv's SVD was 5× slower); singular systems (a side with one distinct x) get RSS = inf
+    scale = np.einsum("cii->c", XtX) ** XtX.shape[-1]
+    ok = np.abs(np.linalg.det(XtX)) > 1e-12 * scale
+    beta = np.full(Xty.shape, np.nan)
+    if ok.any():
+        beta[ok] = np.linalg.solve(XtX[ok], Xty[ok][..., None])[..., 0]
+    rss = np.where(ok, np.maximum(float(y @ y) - np.einsum("ci,ci->c", np.nan_to_num(beta), Xty), 0.0), np.inf)
     return beta, rss
 
 
@@ -102,6 +108,19 @@ def _candidates(u_sorted: np.ndarray) -> np.ndarray:
         keep = np.unique(np.linspace(0, cand.size - 1, N_GRID_MAX).round().astype(int))
         cand = np.unique(np.concatenate([cand[keep], np.intersect1d(cand, ux)[:: max(1, ux.size // N_GRID_MAX)]]))
     return cand
+
+
+def _fit_fast(u: np.ndarray, y: np.ndarray, model: str, cand: np.ndarray) -> tuple[float, np.ndarray]:
+    """Bootstrap refit: grid, then a vectorised 64-point grid between the best one's neighbours in
+    place of minimize_scalar (same bracket, ~30× cheaper; its resolution, bracket/64, is far below
+    the bootstrap spread it feeds)."""
+    _, rss = _lstsq_many(u, y, cand, model)
+    k = int(np.argmin(rss))
+    lo, hi = cand[max(k - 1, 0)], cand[min(k + 1, cand.size - 1)]
+    fine = np.linspace(lo, hi, 65) if hi > lo else cand[k:k + 1]
+    beta, rss_f = _lstsq_many(u, y, fine, model)
+    j = int(np.argmin(rss_f))
+    return float(fine[j]), beta[j]
 
 
 def _fit_core(u: np.ndarray, y: np.ndarray, model: str, cand: np.ndarray) -> tuple[float, np.ndarray, float, np.ndarray]:
@@ -249,7 +268,7 @@ def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int
         rows = []
         for _ in range(n_boot):
             yb = fitted + rng.choice(resid, size=n, replace=True)
-            cb, bb, _, _ = _fit_core(u, yb, model, cand)
+            cb, bb = _fit_fast(u, yb, model, cand)
             cf, cc = _unshift(model, bb, cb, x0)
             rows.append((*cf, cc))
         boot_params = np.asarray(rows)
