@@ -219,13 +219,16 @@ def test_theta_a_text_output_names_both_readings(tmp_path, capsys):
     (["theta-a", "{ok}", "--d50", "nan"], "--d50"),
     (["theta-a", "{hdr}", "--d50", "0.7"], "line 1"),
     (["theta-a", "{inf}", "--d50", "0.7"], "line 2"),
+    (["theta-a", "{short}", "--d50", "0.7"], "short.txt: the profile is 0.3 mm long"),
 ])
 def test_more_bad_input_exit_2(tmp_path, capsys, argv, needle):
     ok = tmp_path / "ok.txt"
     ok.write_text("\n".join(f"{i * 0.1} {math.sin(i)}" for i in range(100)))
     (tmp_path / "hdr.txt").write_text("x,z\n")
     (tmp_path / "inf.txt").write_text("0,0\n1,inf\n2,0\n3,1\n")
-    subst = dict(tmp=tmp_path, ok=ok, hdr=tmp_path / "hdr.txt", inf=tmp_path / "inf.txt")
+    (tmp_path / "short.txt").write_text("0 0\n0.1 0.05\n0.2 0\n0.3 0.05\n")
+    subst = dict(tmp=tmp_path, ok=ok, hdr=tmp_path / "hdr.txt", inf=tmp_path / "inf.txt",
+                 short=tmp_path / "short.txt")
     assert main([a.format(**subst) for a in argv]) == 2
     err = capsys.readouterr().err
     assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

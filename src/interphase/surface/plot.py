@@ -30,7 +30,7 @@ def plot_profile(profile: Profile, d50: float, path: str | Path, filt: int = 92,
     ax.set_xlabel("x [mm] (soil moves +x)")
     ax.set_ylabel("z [mm]")
     ax.legend(loc="upper right", fontsize=8)
-    ax.set_title(profile.name or "profile")
+    ax.set_title(Path(profile.name).name if profile.name else "profile")
     pax = fig.add_subplot(1, 2, 2, projection="polar")
     edges = np.linspace(0, math.pi, bins + 1)
     hist, _ = np.histogram(th, bins=edges, weights=w)

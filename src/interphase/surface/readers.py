@@ -86,7 +86,7 @@ def read_profile(path: str | Path, units: str | None = None) -> Profile:
         z = np.bincount(group, weights=z) / np.bincount(group)
     if x.size < 3:
         raise InputError(f"only {x.size} data rows", where=where, fix="a profile needs at least 3 points")
-    return Profile(x * factor, z * factor, periodic=False, name=path.stem)
+    return Profile(x * factor, z * factor, periodic=False, name=str(path))   # messages name the file
 
 
 def _find_table(lines: list[str]) -> tuple[int, str | None]:

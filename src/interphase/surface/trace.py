@@ -82,6 +82,10 @@ def centroid_trace(profile: Profile, d50: float, dx: float | None = None) -> Pro
     `default_step`). Periodic profiles give a periodic trace (closing vertex appended)."""
     if not (isinstance(d50, (int, float)) and math.isfinite(d50) and d50 > 0):
         raise InputError(f"D50 must be a positive length, got {d50!r}", where="--d50")
+    if not profile.periodic and profile.length <= d50:
+        raise InputError(f"the profile is {profile.length * 1e3:.4g} mm long, shorter than one grain diameter "
+                         f"(D50 = {d50 * 1e3:g} mm): no grain position lies wholly over it",
+                         where=profile.name or "profile", fix="give a longer profile or a smaller --d50")
     dx = dx or default_step(profile.length, d50)
     x, z, step = uniform_grid(profile, dx)
     r = d50 / 2
