@@ -1,9 +1,10 @@
 """LIGGGHTS engine: Case → deck + data + STL files → `liggghts` subprocess → Results.
 
 Geometry (x = shear axis, z up, y out of plane; one grain layer, centres at y = 0):
-  interface: the soil box [0, L] × [surface top, …] with fixed side walls whose bottoms sit a small
-    gap above the surface's highest point; the rough surface (the profile, extruded in y) slides in
-    −x beneath it at the shear velocity; a servo platen holds the normal force σ·L·t on top.
+  interface: the soil box [0, L] × [surface top, …] with fixed side walls whose bottoms sit a gap
+    above the surface's highest point (`wall_gap`: grains trapped in valleys pass under); the rough
+    surface (the profile extruded in y, one connected mesh) slides in −x beneath it at the shear
+    velocity; a servo platen holds the normal force σ·L·t on top (consolidation runs until it does).
   box: a direct shear box of height H split at H/2; the lower half slides −x; flanges close the
     openings the slide uncovers.
 Quasi-2D thickness t = D50 converts stress to force (F = σ·L·t). Time step dt = 0.2·T_R of the
