@@ -152,7 +152,8 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         if not usable:
             res.warnings.append("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to fit "
                                 "θa–θr and E–θr)")
-        model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu))
+        camp_tp = fitted.tan_phi if math.isfinite(fitted.tan_phi) else None   # the campaign's own box tests
+        model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu, camp_tp))
         tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle", compare(lab_df, model_for),
                               ["δ = atan(tan δ); predicted tan δ = E·tan φ."]))
     table_entries = []
@@ -235,7 +236,7 @@ def _networks(store, points: pd.DataFrame, fdir: Path, res: ReportResult) -> lis
         contacts = pd.read_parquet(path)
         png = fdir / f"network_{T._safe(r['label'])}.png"
         try:
-            draw_network(contacts, int(snap), png, title=f"{r['label']}: peak (snapshot {int(snap)}), "
+            draw_network(contacts, int(snap), png, title=f"{r['label']}\npeak: snapshot {int(snap)}, "
                          f"tan δ = {r['_p']:.3f}")
         except InputError as exc:
             res.warnings.append(f"no force network for {r['label']}: {exc}")

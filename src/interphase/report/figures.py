@@ -180,8 +180,10 @@ def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder
     """Stress ratio vs shear displacement, one curve per case (smoothed where the series has it)."""
     fig, ax = plt.subplots(figsize=(8, 5))
     for i, (label, s) in enumerate(sorted(curves.items())):
+        if "stress_ratio_smooth" in s:      # raw faint, the peak-finding moving average on top
+            ax.plot(s["shear_disp"] * 1e3, s["stress_ratio"], lw=0.5, alpha=0.3, color=f"C{i % 10}")
         y = s["stress_ratio_smooth"] if "stress_ratio_smooth" in s else s["stress_ratio"]
-        ax.plot(s["shear_disp"] * 1e3, y, lw=1.0, color=f"C{i % 10}", label=label)
+        ax.plot(s["shear_disp"] * 1e3, y, lw=1.2, color=f"C{i % 10}", label=label)
     ax.set_xlabel("shear displacement [mm]")
     ax.set_ylabel("stress ratio [-] (surface ΣFx/Σ−Fz; box τ/σ)")
     ax.set_title(title, fontsize=10)
