@@ -116,3 +116,25 @@ def test_cli_predict_sawtooth_gives_higher_e(capsys, tmp_path):
 def test_cli_predict_bad_input_exit_2(capsys, argv, where):
     code, _, err = _run(capsys, "predict", DEKTAK, "--units", "um", *argv)
     assert code == 2 and where in err and "Traceback" not in err
+
+
+def test_cli_predict_flat_spaced_profile_takes_the_fig_6_9_branch(capsys, tmp_path):
+    prof = tmp_path / "spaced.txt"
+    assert main(["profile", "spaced", "--rt", "1", "--sw", "2", "--sr", "1", "-o", str(prof)]) == 0
+    capsys.readouterr()
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["flat_spaced"] and d["branch"].startswith("flat-spaced") and d["filter"] == 90
+    assert d["theta_a_deg"] == pytest.approx(d["theta_a_deg_90"])
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--filter", "92", "--json")
+    assert code == 0 and json.loads(out)["branch"].startswith("dilative")
+
+
+def test_cli_predict_fit_without_enough_cases_says_why(capsys, tmp_path):
+    quick = __import__("pathlib").Path(__file__).resolve().parents[1] / "campaigns" / "quick.toml"
+    if not (quick.parent.parent / "runs" / "quick" / "index.sqlite").exists():
+        pytest.skip("quick campaign has not run")
+    code, _, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um",
+                        "--fit", str(quick))
+    assert code == 2 and "no fit: n =" in err

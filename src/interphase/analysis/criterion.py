@@ -64,7 +64,9 @@ def default_theta_r(friction: float) -> _Curve:
 
 
 def default_ratio() -> _Curve:
-    return _Curve(lambda a: 0.5 + 0.5 * np.clip(a - 95.0, 0.0, 35.0) / 35.0, "study default θr/θa(θa ccw)")
+    c = _Curve(lambda a: 0.5 + 0.5 * np.clip(a - 95.0, 0.0, 35.0) / 35.0, "study default θr/θa(θa ccw)")
+    c.x_range = (STUDY_DEFAULT_RANGE[0] + 90.0, STUDY_DEFAULT_RANGE[1] + 90.0)   # its x is θa ccw
+    return c
 
 
 def default_efficiency(tan_phi: float) -> _Curve:
