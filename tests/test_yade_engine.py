@@ -175,6 +175,18 @@ def test_contact_parameters_mapping():
     assert contact_parameters(tiny(restitution=1.0))["betan"] == 0.0
 
 
+def test_facet_contacts_get_the_liggghts_wall_stiffness():
+    """YADE's facet–sphere Hertz coefficient 4/3·E*·√R* with R* = (2r·r)/(3r) (facet refR1 = 2r)
+    and the stiffened wall equals LIGGGHTS' wall contact 4/3·E/(2(1−ν²))·√r."""
+    c = tiny()
+    p = contact_parameters(c)
+    r, nu = 0.35e-3, p["nu"]
+    e_star = 1.0 / ((1 - nu ** 2) / p["E"] + (1 - nu ** 2) / p["E_wall"])
+    yade = 4 / 3 * e_star * np.sqrt(2 * r * r / (3 * r))
+    liggghts = 4 / 3 * p["E"] / (2 * (1 - nu ** 2)) * np.sqrt(r)
+    assert yade == pytest.approx(liggghts, rel=1e-12)
+
+
 def test_python_error_is_an_engine_error_with_its_last_line(yade_engine, tmp_path):
     yade_engine.write_input(tiny(), tmp_path)
     p = json.loads((tmp_path / "params.json").read_text())

@@ -54,18 +54,26 @@ def time_step(case: Case) -> float:
     return lig_dt(case)
 
 
+#: Ig2_Facet_Sphere_ScGeom gives the facet refR1 = 2r, so YADE's facet–sphere Hertz radius is
+#: R* = 2r/3 where LIGGGHTS' wall has R* = r. Walls get E_w = E/(2/√1.5 − 1) ≈ 1.58·E, which makes
+#: YADE's E*·√R* (and G*·√R*, same ν) equal to LIGGGHTS' for every grain–wall contact.
+FACET_STIFFENING = 1.0 / (2.0 / math.sqrt(1.5) - 1.0)
+
+
 def contact_parameters(case: Case) -> dict:
     """YADE Mindlin parameters that reproduce the LIGGGHTS Hertz model of the same Case.
 
     - E = 2G(1+ν) per material; YADE's kn = 1.5·kno·√δ = 2E*√(R*δ) and ks = 8G*√(R*δ) are the
-      LIGGGHTS tangent stiffnesses Sn, St exactly.
+      LIGGGHTS tangent stiffnesses Sn, St exactly between grains; walls (facets, R* = 2r/3 in YADE)
+      get E_wall = FACET_STIFFENING·E so that grain–wall contacts match LIGGGHTS' (R* = r) too.
     - Damping: LIGGGHTS γ = 2√(5/6)·|β|·√(S·m*) with β = ln e/√(ln²e + π²); YADE c = 2·betan·√(kn·m̄).
       So betan = betas = √(5/6)·|β(e)| gives the same dashpot (YADE's `en` would use Thornton's fit,
       a different law). YADE drops the shear dashpot at sliding contacts; LIGGGHTS applies none there
       either (it only dumps it).
     - Rolling: LIGGGHTS cdt torque = μr·R_eff·Fn (R_eff = r1r2/(r1+r2) between grains); YADE's
       elastic–plastic moment is capped at eta·R_mean·Fn (R_mean = (r1+r2)/2). eta = μr/2 matches the
-      grain–grain cap for equal grains (the bulk); wall contacts then get YADE's cap with R_mean = r.
+      grain–grain cap for equal grains (the bulk); wall contacts then get eta·R_mean = 0.75·μr·r
+      (R_mean = 1.5r with the facet's refR1 = 2r) where LIGGGHTS has μr·r.
       krot [N·m/rad] (one constant, YADE's limitation) = ks(δ = 0.3 % D50)·(D50/2)², so the cap is
       reached after a rotation of a few 1e−3 rad: close to cdt's constant torque.
     """
@@ -75,7 +83,8 @@ def contact_parameters(case: Case) -> dict:
     r50 = case.d50 / 2
     g_eff = case.shear_modulus / (2 * (2 - case.poisson))        # YADE/LIGGGHTS G* of two equal materials
     ks = 8 * g_eff * math.sqrt((r50 / 2) * TYPICAL_OVERLAP * case.d50)
-    return dict(E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, density=case.density,
+    E = youngs_modulus(case.shear_modulus, case.poisson)
+    return dict(E=E, E_wall=E * FACET_STIFFENING, nu=case.poisson, density=case.density,
                 mu_pp=case.friction_pp, mu_ps=case.friction_ps if case.test == "interface" else case.friction_pw,
                 mu_pw=case.friction_pw, betan=b, betas=b, eta=case.rolling_friction / 2, krot=ks * r50 ** 2)
 
