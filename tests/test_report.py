@@ -143,14 +143,18 @@ def test_cli_report_without_results_exit_2(tmp_path, capsys):
     assert code == 2 and "campaign run" in err and "Traceback" not in err
 
 
-QUICK = ROOT / "runs" / "quick"
-
-
-@pytest.mark.skipif(not (QUICK / "index.sqlite").exists(), reason="quick campaign has not run (make run)")
+@pytest.mark.liggghts
 def test_real_quick_campaign_report(tmp_path, capsys):
-    code = main(["report", str(ROOT / "campaigns" / "quick.toml"), "--out", str(tmp_path), "--lab", str(LAB),
-                 "--bootstrap", "20"])
+    """The quick campaign run for real (LIGGGHTS, 5 tiny cases) into tmp, then reported."""
+    text = (ROOT / "campaigns" / "quick.toml").read_text()
+    toml = tmp_path / "quick.toml"
+    toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp_path / "runs"}"', 1))
+    assert main(["run", str(toml)]) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    out = tmp_path / "report"
+    code = main(["report", str(toml), "--out", str(out), "--lab", str(LAB), "--bootstrap", "20"])
     assert code == 0, capsys.readouterr().err
+    tmp_path = out
     check_outputs(tmp_path, ["quick"], lab=True)
     assert list((tmp_path / "figures").glob("curves_*.png"))
     assert list((tmp_path / "figures").glob("network_*.png"))
