@@ -23,13 +23,11 @@ import json
 import math
 import os
 import re
-import shlex
 import shutil
 import signal
 import subprocess
 from pathlib import Path
 
-import numpy as np
 
 from interphase import __version__
 from interphase.case import Case
