@@ -126,13 +126,18 @@ def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
     assert {r["metric"] for r in data["rows"]} >= {"peak_stress_ratio", "theta_r_surface_deg"}
 
 
-def test_campaign_run_reads_a_crosscheck_file_only_through_crosscheck(tiny_campaign):
-    """The [crosscheck] table is not a campaign key: `campaign run` refuses it with the line."""
+def test_a_crosscheck_file_is_a_campaign_too(tiny_campaign):
+    """`campaign run` reads a cross-check file as it is: the schema skips [crosscheck], whose
+    tolerances only `campaign crosscheck` reads (and validates)."""
+    from interphase.campaign.crosscheck import load
     from interphase.campaign.schema import load_campaign
 
     path, _ = tiny_campaign
-    with pytest.raises(InputError, match="crosscheck"):
-        load_campaign(path)
+    plain = load_campaign(path)
+    campaign, tol, readable, _ = load(path)
+    assert readable == path
+    assert [c.case for c in plain.cases] == [c.case for c in campaign.cases]
+    assert tol and all(v > 0 for v in tol.values())
 
 
 def test_missing_file_is_an_input_error(tmp_path):

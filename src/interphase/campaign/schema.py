@@ -59,7 +59,8 @@ from interphase.errors import InputError
 
 ENGINES = ("liggghts", "yade")
 EXECUTORS = ("local", "slurm")
-TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs")
+TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs",
+            "crosscheck")   # [crosscheck] tolerances: read by campaign.crosscheck, ignored here
 CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output")
 EXECUTION_KEYS = ("executor", "jobs", "partition", "time_limit", "time_factor", "max_concurrent")
 GROUP_KEYS = ("name", "description", "case", "sweep", "zip")
