@@ -131,10 +131,10 @@ def test_cli_predict_flat_spaced_profile_takes_the_fig_6_9_branch(capsys, tmp_pa
     assert code == 0 and json.loads(out)["branch"].startswith("dilative")
 
 
-def test_cli_predict_fit_without_enough_cases_says_why(capsys, tmp_path):
-    quick = __import__("pathlib").Path(__file__).resolve().parents[1] / "campaigns" / "quick.toml"
-    if not (quick.parent.parent / "runs" / "quick" / "index.sqlite").exists():
-        pytest.skip("quick campaign has not run")
+@pytest.mark.liggghts
+def test_cli_predict_fit_without_enough_cases_says_why(capsys, quick_campaign):
+    quick = quick_campaign
+    capsys.readouterr()
     code, _, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um",
                         "--fit", str(quick))
     assert code == 2 and "no fit: n =" in err

@@ -144,15 +144,11 @@ def test_cli_report_without_results_exit_2(tmp_path, capsys):
 
 
 @pytest.mark.liggghts
-def test_real_quick_campaign_report(tmp_path, capsys):
-    """The quick campaign run for real (LIGGGHTS, 5 tiny cases) into tmp, then reported."""
-    text = (ROOT / "campaigns" / "quick.toml").read_text()
-    toml = tmp_path / "quick.toml"
-    toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp_path / "runs"}"', 1))
-    assert main(["run", str(toml)]) == 0, capsys.readouterr().err
+def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
+    """The quick campaign run for real (LIGGGHTS, 5 tiny cases; conftest.quick_campaign), reported."""
     capsys.readouterr()
     out = tmp_path / "report"
-    code = main(["report", str(toml), "--out", str(out), "--lab", str(LAB), "--bootstrap", "20"])
+    code = main(["report", str(quick_campaign), "--out", str(out), "--lab", str(LAB), "--bootstrap", "20"])
     assert code == 0, capsys.readouterr().err
     tmp_path = out
     check_outputs(tmp_path, ["quick"], lab=True)
