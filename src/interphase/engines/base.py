@@ -160,3 +160,27 @@ def get_engine(name: str, **kwargs) -> Engine:
         from interphase.errors import InputError
         raise InputError(f"unknown engine {name!r}", where="engine", fix="use liggghts or yade")
     return _REGISTRY[name](**kwargs)
+
+
+def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: str) -> int:
+    """Run an engine: cwd = folder (never chdir), stdout + stderr to folder/engine.log, in its own
+    session so that a timeout or an interruption kills the whole process group. Returns the return
+    code; a timeout raises EngineError('timeout') with the log tail."""
+    import signal
+    import subprocess
+
+    log = Path(folder) / "engine.log"
+    with open(log, "wb") as out:
+        proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
+                                stdin=subprocess.DEVNULL, start_new_session=True)
+        try:
+            return proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            raise EngineError("timeout", f"{name} ran longer than {timeout:.0f} s", command=cmd,
+                              log_tail=log_tail(log), folder=folder) from None
+        except BaseException:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            raise

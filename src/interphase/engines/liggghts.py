@@ -21,7 +21,6 @@ import os
 import re
 import shlex
 import shutil
-import signal
 import subprocess
 from pathlib import Path
 
@@ -29,7 +28,7 @@ import numpy as np
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register
+from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
@@ -222,20 +221,7 @@ class Liggghts(Engine):
         env = dict(os.environ, OMP_NUM_THREADS=str(self.profile.threads))
         timeout = self.timeout_for(folder)
         log = folder / "engine.log"
-        with open(log, "wb") as out:
-            proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
-                                    start_new_session=True)
-            try:
-                rc = proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-                raise EngineError("timeout", f"LIGGGHTS ran longer than {timeout:.0f} s", command=cmd,
-                                  log_tail=log_tail(log), folder=folder) from None
-            except BaseException:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-                raise
+        rc = run_logged(cmd, folder, env, timeout, "LIGGGHTS")
         text = log_tail(log, 60)
         cause = classify(rc, text)
         if cause:

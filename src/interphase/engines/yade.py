@@ -24,14 +24,13 @@ import math
 import os
 import re
 import shutil
-import signal
 import subprocess
 from pathlib import Path
 
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register
+from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -205,20 +204,7 @@ class Yade(Engine):
         env = dict(os.environ, OMP_NUM_THREADS=str(self.profile.threads), PYTHONUNBUFFERED="1")
         timeout = self.timeout_for(folder)
         log = folder / "engine.log"
-        with open(log, "wb") as out:
-            proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
-                                    stdin=subprocess.DEVNULL, start_new_session=True)
-            try:
-                rc = proc.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-                raise EngineError("timeout", f"YADE ran longer than {timeout:.0f} s", command=cmd,
-                                  log_tail=log_tail(log), folder=folder) from None
-            except BaseException:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
-                raise
+        rc = run_logged(cmd, folder, env, timeout, "YADE")
         text = log_tail(log, 80)
         cause, message = classify(rc, text)
         if cause:
