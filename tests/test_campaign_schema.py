@@ -4,7 +4,6 @@ the study's five groups, sweeps/zips/groups/pairs, and case ids stable across ru
 from __future__ import annotations
 
 import hashlib
-import os
 from pathlib import Path
 
 import pytest

@@ -4,7 +4,6 @@ import json
 from pathlib import Path
 
 import pandas as pd
-import pytest
 
 from interphase.analysis.quasistatic import checks
 from interphase.case import case_from_dict

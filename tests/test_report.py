@@ -3,7 +3,6 @@
 output when it is there."""
 
 import re
-import shutil
 from pathlib import Path
 
 import pandas as pd

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.correlations import SPECS, BilinearFit, FitError, fit_bilinear, subset
+from interphase.analysis.correlations import SPECS, FitError, fit_bilinear, subset
 from interphase.errors import InputError
 
 DEFAULT_PHI_DEG = 30.0

@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pandas as pd
 
 from interphase.analysis.strength import inertial_number, shear_rate_from_profile
 from interphase.case import Case

@@ -13,7 +13,6 @@ Every failure is an InputError naming the file and, where it applies, the line.
 
 from __future__ import annotations
 
-import io
 import math
 import re
 from pathlib import Path

@@ -25,7 +25,6 @@ def rt_ave(profile: Profile, window: float, dx: float | None = None) -> float:
     dx = dx or window / 500
     if profile.periodic:
         _, z, step = uniform_grid(profile, dx)
-        x = None
     else:
         prof = centerline(profile)
         uni = resample(prof, dx)
