@@ -184,3 +184,12 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
             raise
+
+
+def steps_for(duration: float, dt: float, multiple: int = 1) -> int:
+    """Time steps covering `duration` [s] at step `dt` [s], rounded up to a multiple of `multiple`
+    (decks align stage boundaries with the snapshot interval so dumps fall on them)."""
+    import math
+
+    n = max(1, int(math.ceil(duration / dt)))
+    return -(-n // multiple) * multiple

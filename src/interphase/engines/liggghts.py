@@ -16,7 +16,6 @@ contact. Damping: LIGGGHTS's Hertz damping from the coefficient of restitution c
 from __future__ import annotations
 
 import functools
-import math
 import os
 import re
 import shlex
@@ -28,7 +27,7 @@ import numpy as np
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged
+from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
@@ -65,10 +64,6 @@ def wall_gap(profile, d_min: float, d_max: float) -> float:
     p = float(np.max(c[1:-1][minima]) + d_max / 2 - profile.z.max()) if minima.any() else d_max
     gap = p + 0.05 * d_min
     return gap if gap < 0.5 * d_min else 0.05 * d_min
-
-
-def _steps(duration: float, dt: float) -> int:
-    return max(1, int(math.ceil(duration / dt)))
 
 
 @register
@@ -156,7 +151,7 @@ class Liggghts(Engine):
               mu_s, 0.0, 0.0,
               case.friction_pw, 0.0, 0.0]
         rr = [case.rolling_friction] * 9
-        n_shear = _steps(case.shear_distance / case.shear_velocity, dt)
+        n_shear = steps_for(case.shear_distance / case.shear_velocity, dt)
         n_snap = max(1, int(round(case.snapshot_every / case.shear_velocity / dt)))
         # history every n_history steps, a divisor of the snapshot interval so that every contact
         # snapshot has a history row at the same step (mesh force vs summed contacts)
@@ -173,8 +168,8 @@ class Liggghts(Engine):
             # left a 200-grain packing at 0.5 % of the target after 0.02 s (measured)
             servo_ratio=1e-3, shear_velocity=case.shear_velocity,
             # multiples of the snapshot interval: shear then starts on a dump step
-            n_consolidate=-(-_steps(CONSOLIDATION_TIME, dt) // n_snap) * n_snap, n_shear=n_shear,
-            n_chunk=-(-_steps(CONSOLIDATION_TIME / 4, dt) // n_snap) * n_snap, n_chunks_max=CONSOLIDATION_CHUNKS,
+            n_consolidate=steps_for(CONSOLIDATION_TIME, dt, n_snap), n_shear=n_shear,
+            n_chunk=steps_for(CONSOLIDATION_TIME / 4, dt, n_snap), n_chunks_max=CONSOLIDATION_CHUNKS,
             platen_force_lo=(1 - PLATEN_TOLERANCE) * g["platen_force"],
             platen_force_hi=(1 + PLATEN_TOLERANCE) * g["platen_force"],
             n_snapshot=n_snap,

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged
+from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -94,10 +94,6 @@ def _inplane(segments, width: float) -> list[list[float]]:
     return out
 
 
-def _steps(duration: float, dt: float) -> int:
-    return max(1, int(math.ceil(duration / dt)))
-
-
 @register
 class Yade(Engine):
     name = "yade"
@@ -152,12 +148,12 @@ class Yade(Engine):
         inset = 0.02 * d_max
         platen = _inplane([[L - inset, platen_z, inset, platen_z]], width)
         z_hi = wall_top + 2 * d_max
-        n_shear = _steps(D / case.shear_velocity, dt)
+        n_shear = steps_for(D / case.shear_velocity, dt)
         n_snap = max(1, int(round(case.snapshot_every / case.shear_velocity / dt)))
         k = max(1, round(n_snap / max(1, n_shear // HISTORY_POINTS)))
         n_hist = max(1, n_snap // k)
         n_snap = n_hist * k                      # every snapshot step also has a history row
-        n_cons = -(-_steps(CONSOLIDATION_TIME, dt) // n_snap) * n_snap
+        n_cons = steps_for(CONSOLIDATION_TIME, dt, n_snap)
         skin = 0.2 * d_min
         return dict(
             version=__version__, test=case.test, dt=dt, gravity=9.81,
