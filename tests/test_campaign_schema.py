@@ -204,6 +204,6 @@ def test_real_ids_are_stable_across_loads_and_working_directories(tmp_path, monk
 
 def test_time_limits_grow_with_case_size():
     c = load_campaign(CAMPAIGNS / "group1.toml")
-    small = c.cases[0].case.replace(box_length_d50=10.0, box_height_d50=5.0, shear_distance=0.001)
+    small = c.cases[0].case.replace(box_length_d50=12.0, box_height_d50=5.0, shear_distance=0.001)
     assert time_limit_minutes(small) < time_limit_minutes(c.cases[0].case)
     assert time_limit_minutes(c.cases[0].case, fixed=7.5) == 8

@@ -5,6 +5,8 @@ Geometry (x = shear axis, z up, y out of plane; one grain layer, centres at y = 
     above the surface's highest point (`wall_gap`: grains trapped in valleys pass under); the rough
     surface (the profile extruded in y, one connected mesh) slides in −x beneath it at the shear
     velocity; a servo platen holds the normal force σ·L·t on top (consolidation runs until it does).
+    History also carries window_fx/fz: the force on the surface from the grains in Case.window
+    (per-grain wall forces, `store_force yes`), away from the side walls.
   box: a direct shear box of height H split at H/2; the lower half slides −x; flanges close the
     openings the slide uncovers.
 Quasi-2D thickness t = D50 converts stress to force (F = σ·L·t). Time step dt = 0.2·T_R of the
@@ -23,11 +25,11 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import numpy as np
 
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
+from interphase.engines.device import wall_gap
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
@@ -44,26 +46,6 @@ HISTORY_POINTS = 400        # history rows over the shear
 def time_step(case: Case) -> float:
     """dt = 0.2 × Rayleigh time of the smallest grain [s]."""
     return 0.2 * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus, case.poisson)
-
-
-def wall_gap(profile, d_min: float, d_max: float) -> float:
-    """Height of the side walls' bottom edges above the surface's highest point [m].
-
-    A grain resting in a valley of the surface rides along with it; if it sticks out above the
-    peaks by p, a wall edge lower than that catches it and the grain jams between the edge and the
-    rising face (forces 10× typical, overlaps of 25 % D50, measured). So the edge sits p + 0.05·d_min
-    above the peaks, p from the centroid trace of the largest grain (its highest local minimum),
-    letting trapped grains leave with the surface as in the physical device, while a free grain
-    (≥ d_min) still cannot pass under it. When p + 0.05·d_min ≥ d_min/2 (flat or shallow valleys:
-    no grain is trapped below the peaks) the edge sits 0.05·d_min above the peaks."""
-    from interphase.surface.trace import centroid_trace
-
-    tr = centroid_trace(profile, d_max, dx=d_max / 1000)   # p to ~1e-3·d_max; the default step cost 0.15 s
-    c = tr.z
-    minima = (c[1:-1] <= c[:-2]) & (c[1:-1] <= c[2:])
-    p = float(np.max(c[1:-1][minima]) + d_max / 2 - profile.z.max()) if minima.any() else d_max
-    gap = p + 0.05 * d_min
-    return gap if gap < 0.5 * d_min else 0.05 * d_min
 
 
 @register
@@ -112,6 +94,7 @@ class Liggghts(Engine):
             z_lo = float(z.min()) - d_max
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max   # the surface travels −D
             moving, fixed = "surf", "sides"
+            window = (*case.window, top + d_max)
         else:
             z_mid = H / 2
             gap = 0.05 * d_min
@@ -129,6 +112,7 @@ class Liggghts(Engine):
             z_lo = -d_max
             x_lo, x_hi = -far - D - d_max, L + far + d_max
             moving, fixed = "lower", "upper"
+            window = None                                       # the whole lower half
         platen_z = pack.top + 0.5 * d_max
         inset = 0.02 * d_max
         files["platen.stl"] = stl_text(*segment_triangles([[L - inset, platen_z, inset, platen_z]], y0, y1))
@@ -136,7 +120,7 @@ class Liggghts(Engine):
         box = (x_lo, x_hi, -d_max, d_max, z_lo, z_hi)
         files["grains.data"] = write_liggghts_data(pack, case.density, box)
         skin = 0.2 * d_min
-        return dict(files=files, dt=dt, skin=skin, moving=moving, fixed=fixed, n_grains=pack.n,
+        return dict(files=files, dt=dt, skin=skin, moving=moving, fixed=fixed, n_grains=pack.n, window=window,
                     platen_com=(L / 2, platen_z), platen_force=case.normal_stress * L * t,
                     servo_vmax=min(0.1, 0.5 * skin / (2 * dt)), thickness=t, box=box)
 
@@ -162,7 +146,7 @@ class Liggghts(Engine):
             version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
             E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson,
             restitution=[case.restitution] * 9, friction=mu, rolling=rr, rolling_model="cdt",
-            dt=dt, skin=g["skin"], moving=g["moving"], fixed=g["fixed"],
+            dt=dt, skin=g["skin"], moving=g["moving"], fixed=g["fixed"], window=g["window"],
             platen_com=g["platen_com"], platen_force=g["platen_force"], servo_vmax=g["servo_vmax"],
             # mode auto: platen speed ≤ ratio·r_min/dt in contact, 0.1× that near the target; 1e-4
             # left a 200-grain packing at 0.5 % of the target after 0.02 s (measured)

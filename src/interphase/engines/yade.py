@@ -2,9 +2,10 @@
 
 The geometry is the LIGGGHTS deck's (engines/liggghts.py), built from the same packing
 (engines/packing.lattice_packing) and the same surface profile:
-  interface: soil box [0, L] between fixed side walls whose bottoms sit 0.05·d_min above the
-    surface's highest point; the rough surface slides −x beneath it at the shear velocity; a platen
-    servo holds σ·L·t on top (t = D50, the quasi-2D thickness).
+  interface: soil box [0, L] between fixed side walls whose bottoms sit `engines.device.wall_gap`
+    above the surface's highest point; the rough surface slides −x beneath it at the shear velocity;
+    a platen servo holds σ·L·t on top (t = D50, the quasi-2D thickness). History also carries
+    window_fx/fz, the force on the surface from the grains in Case.window.
   box: a direct shear box of height H split at H/2, lower half (bottom, sides, right flange) slides −x.
 Walls are facets, one triangle per segment with an edge in the grain plane y = 0
 (surface.mesh.inplane_triangles); a grain at a convex surface vertex touches two facets at the same
@@ -31,6 +32,7 @@ from pathlib import Path
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
+from interphase.engines.device import wall_gap
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -131,7 +133,9 @@ class Yade(Engine):
             wall_top = pack.top + 3 * d_max
             pts, tri = inplane_triangles(type(prof)(x, z, prof.periodic, prof.name), width)
             moving = pts[tri].reshape(-1, 9).tolist()
+            gap = wall_gap(prof, d_min, d_max)           # the same side walls as LIGGGHTS'
             fixed = _inplane([[0.0, wall_top, 0.0, top + gap], [L, top + gap, L, wall_top]], width)
+            window = [*case.window, top + d_max]
             z_lo = float(z.min()) - d_max
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max
         else:
@@ -139,6 +143,7 @@ class Yade(Engine):
             pack = lattice_packing(case, 0.0, L, 0.0)
             wall_top = max(pack.top, H) + 3 * d_max
             far = D + margin
+            window = None
             moving = _inplane([[-far, 0.0, L + far, 0.0], [0.0, z_mid - gap, 0.0, 0.0],
                                [L, 0.0, L, z_mid - gap], [L + far, z_mid - gap, L, z_mid - gap]], width)
             fixed = _inplane([[0.0, wall_top, 0.0, z_mid], [L, z_mid, L, wall_top], [0.0, z_mid, -far, z_mid]], width)
@@ -166,7 +171,7 @@ class Yade(Engine):
             servo_vmax=min(0.1, 0.5 * skin / (2 * dt)), servo_band=SERVO_BAND,
             shear_velocity=case.shear_velocity,
             steps=dict(n_consolidate=n_cons, n_shear=n_shear, n_snapshot=n_snap, n_history=n_hist),
-            bounds=[x_lo, x_hi, z_lo, z_hi],
+            bounds=[x_lo, x_hi, z_lo, z_hi], window=window,
             thickness=case.thickness, n_grains=pack.n, shear_sign=1,
         )
 
