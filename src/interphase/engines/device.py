@@ -26,3 +26,17 @@ def wall_gap(profile, d_min: float, d_max: float) -> float:
     p = float(np.max(c[1:-1][minima]) + d_max / 2 - profile.z.max()) if minima.any() else d_max
     gap = p + 0.05 * d_min
     return gap if gap < 0.5 * d_min else 0.05 * d_min
+
+
+def side_walls(profile, length: float, d_min: float, d_max: float, wall_top: float) -> list[list[float]]:
+    """The interface box's two side walls as segments [x0, z0, x1, z1] [m] (left normal +x, right −x).
+
+    The surface moves −x: valleys leave the box under the LEFT wall, carrying the grains trapped in
+    them, so that wall's bottom sits `wall_gap` above the peaks. Valleys enter under the RIGHT wall
+    empty, so it sits 0.05·d_min above the peaks: with the left wall's gap there, grains on the
+    flats of spaced profiles were pushed out under it by the soil, met the next tooth outside and
+    were shot away (lost atoms in 2 of 3 seeds, spaced saw-tooth μs = 0.2, measured)."""
+    top = float(profile.z.max())
+    left = top + wall_gap(profile, d_min, d_max)
+    right = top + 0.05 * d_min
+    return [[0.0, wall_top, 0.0, left], [length, right, length, wall_top]]

@@ -1,8 +1,9 @@
 """LIGGGHTS engine: Case → deck + data + STL files → `liggghts` subprocess → Results.
 
 Geometry (x = shear axis, z up, y out of plane; one grain layer, centres at y = 0):
-  interface: the soil box [0, L] × [surface top, …] with fixed side walls whose bottoms sit a gap
-    above the surface's highest point (`wall_gap`: grains trapped in valleys pass under); the rough
+  interface: the soil box [0, L] × [surface top, …] with fixed side walls whose bottoms sit above
+    the surface's highest point (`engines.device.side_walls`: grains trapped in valleys pass under
+    the left one, where the surface leaves the box); the rough
     surface (the profile extruded in y, one connected mesh) slides in −x beneath it at the shear
     velocity; a servo platen holds the normal force σ·L·t on top (consolidation runs until it does).
     History also carries window_fx/fz: the force on the surface from the grains in Case.window
@@ -25,11 +26,13 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import numpy as np
+
 
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
-from interphase.engines.device import wall_gap
+from interphase.engines.device import side_walls
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
@@ -79,7 +82,6 @@ class Liggghts(Engine):
             x = prof.x - margin
             z = prof.z
             top = float(z.max())
-            gap = wall_gap(prof, d_min, d_max)
             floor = top + 0.02 * d_max
             pack = lattice_packing(case, 0.0, L, floor)
             wall_top = pack.top + 3 * d_max
@@ -89,9 +91,13 @@ class Liggghts(Engine):
             # all in the mesh force); this mesh gave none (docs/liggghts.md)
             pts, tri = extruded_triangles(type(prof)(x, z, prof.periodic, prof.name), y0, y1)
             files["surface.stl"] = stl_text(pts, tri)
-            sides = [[0.0, wall_top, 0.0, top + gap], [L, top + gap, L, wall_top]]
+            sides = side_walls(prof, L, d_min, d_max, wall_top)
             files["sides.stl"] = stl_text(*segment_triangles(sides, y0, y1))
             z_lo = float(z.min()) - d_max
+            # the openings under the side walls: a grain whose centre crosses one has left the box
+            # and is deleted (fix massflow/mesh), before it can wedge outside (engines.device)
+            files["exit_left.stl"] = stl_text(*segment_triangles([[0.0, z_lo, 0.0, sides[0][3]]], y0, y1))
+            files["exit_right.stl"] = stl_text(*segment_triangles([[L, sides[1][1], L, z_lo]], y0, y1))
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max   # the surface travels −D
             moving, fixed = "surf", "sides"
             window = (*case.window, top + d_max)
@@ -147,6 +153,7 @@ class Liggghts(Engine):
             E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson,
             restitution=[case.restitution] * 9, friction=mu, rolling=rr, rolling_model="cdt",
             dt=dt, skin=g["skin"], moving=g["moving"], fixed=g["fixed"], window=g["window"],
+            exits=case.test == "interface",
             platen_com=g["platen_com"], platen_force=g["platen_force"], servo_vmax=g["servo_vmax"],
             # mode auto: platen speed ≤ ratio·r_min/dt in contact, 0.1× that near the target; 1e-4
             # left a 200-grain packing at 0.5 % of the target after 0.02 s (measured)
@@ -202,6 +209,9 @@ class Liggghts(Engine):
         log = folder / "engine.log"
         rc = run_logged(cmd, folder, env, timeout, "LIGGGHTS")
         text = log_tail(log, 60)
+        leak = check_grain_balance(folder) if (folder / "history.txt").exists() else None
+        if leak:
+            raise EngineError("lost_atoms", leak, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
         cause = classify(rc, text)
         if cause:
             first = next((ln for ln in text.splitlines() if "ERROR" in ln), f"return code {rc}")
@@ -217,9 +227,31 @@ class Liggghts(Engine):
         return read_folder(folder)
 
 
+def check_grain_balance(folder: Path) -> str | None:
+    """A message if grains vanished other than through the side openings, else None.
+
+    Every history row must satisfy grains in the run + grains deleted at the openings ≥ grains
+    placed (engine.json n_grains; '>' while a counted grain awaits deletion at the next neighbour
+    list build); LIGGGHTS itself only warns once (thermo_modify lost warn)."""
+    import json
+
+    n0 = json.loads((folder / "engine.json").read_text())["n_grains"]
+    h = np.loadtxt(folder / "history.txt", skiprows=1, ndmin=2)
+    if not h.size:
+        return None
+    names = (folder / "history.txt").read_text().split("\n", 1)[0].split()
+    na, nout = h[:, names.index("n_grains")], h[:, names.index("n_removed")]
+    bad = np.flatnonzero(na + nout < n0)
+    if bad.size:
+        i = bad[0]
+        return (f"Lost atoms: {n0 - int(na[i]) - int(nout[i])} grain(s) left the domain by {int(h[i, 0])} "
+                f"(history.txt: {int(na[i])} in the run + {int(nout[i])} removed at the side openings < {n0} placed)")
+    return None
+
+
 def classify(returncode: int, text: str) -> str | None:
     """Cause of a failed run from its return code and log text, None if it succeeded."""
-    if re.search(r"Lost atoms", text):
+    if re.search(r"ERROR: Lost atoms", text):
         return "lost_atoms"
     if re.search(r"ERROR.*(mesh|STL|stl|triangle|facet)|mesh.*ERROR", text):
         return "bad_mesh"

@@ -2,8 +2,8 @@
 
 The geometry is the LIGGGHTS deck's (engines/liggghts.py), built from the same packing
 (engines/packing.lattice_packing) and the same surface profile:
-  interface: soil box [0, L] between fixed side walls whose bottoms sit `engines.device.wall_gap`
-    above the surface's highest point; the rough surface slides −x beneath it at the shear velocity;
+  interface: soil box [0, L] between fixed side walls whose bottoms sit above the surface's
+    highest point (`engines.device.side_walls`, as LIGGGHTS); the rough surface slides −x beneath it at the shear velocity;
     a platen servo holds σ·L·t on top (t = D50, the quasi-2D thickness). History also carries
     window_fx/fz, the force on the surface from the grains in Case.window.
   box: a direct shear box of height H split at H/2, lower half (bottom, sides, right flange) slides −x.
@@ -32,7 +32,7 @@ from pathlib import Path
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
-from interphase.engines.device import wall_gap
+from interphase.engines.device import side_walls
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -133,8 +133,7 @@ class Yade(Engine):
             wall_top = pack.top + 3 * d_max
             pts, tri = inplane_triangles(type(prof)(x, z, prof.periodic, prof.name), width)
             moving = pts[tri].reshape(-1, 9).tolist()
-            gap = wall_gap(prof, d_min, d_max)           # the same side walls as LIGGGHTS'
-            fixed = _inplane([[0.0, wall_top, 0.0, top + gap], [L, top + gap, L, wall_top]], width)
+            fixed = _inplane(side_walls(prof, L, d_min, d_max, wall_top), width)   # LIGGGHTS' walls
             window = [*case.window, top + d_max]
             z_lo = float(z.min()) - d_max
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max
@@ -172,6 +171,7 @@ class Yade(Engine):
             shear_velocity=case.shear_velocity,
             steps=dict(n_consolidate=n_cons, n_shear=n_shear, n_snapshot=n_snap, n_history=n_hist),
             bounds=[x_lo, x_hi, z_lo, z_hi], window=window,
+            exits=[0.0, L] if case.test == "interface" else None,   # grains past these x are out of the box
             thickness=case.thickness, n_grains=pack.n, shear_sign=1,
         )
 
