@@ -1,5 +1,6 @@
-"""Analysis on real LIGGGHTS output (tests/data/liggghts_sawtooth45: 45° saw-tooth, 250 grains,
-μs = 0.5): the study's physical relations at the peak snapshot."""
+"""Analysis on real LIGGGHTS output (tests/data/liggghts_sawtooth45: 45° saw-tooth, 1600 grains,
+μs = 0.5; made by tests/data/make_liggghts_sawtooth45.py): the study's physical relations at the
+peak snapshot, measured in the window away from the side walls (Case.window)."""
 
 from __future__ import annotations
 
@@ -22,9 +23,6 @@ def row(summary):
     return summary.row
 
 
-@pytest.mark.xfail(strict=False, reason="measured 2026-11-22: θr at the peak snapshot 37.99° vs atan(0.521) = "
-                   "27.53° (10.46° apart) — one snapshot of 23 surface contacts in a 250-grain case scatters "
-                   "θr by ±6° between snapshots; see the mean-over-snapshots test")
 def test_theta_r_at_surface_near_interface_friction_angle(row):
     """The study: θr at the surface ≈ the interface friction angle atan(peak stress ratio)."""
     delta = math.degrees(math.atan(row["peak_stress_ratio"]))

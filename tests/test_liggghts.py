@@ -134,6 +134,30 @@ def test_summed_sawtooth_contacts_equal_mesh_force_both_components(run):
     assert (c[c.kind == "ps"].nx < -0.5).any()     # faces, not a flat: the check covers inclined normals
 
 
+def test_window_force_is_the_window_grains_surface_contacts(run):
+    """History's window_fx/fz (the deck's per-grain wall-force sum over grains centred in
+    Case.window) equals the summed 'ps' contacts of those grains at every snapshot, both components,
+    to 1e−3 (undamped, as above), and differs from the whole-surface force where grains outside
+    the window touch the surface."""
+    case = tiny(profile=("sawtooth", dict(rt=1.0, sw=2.0, sr=0.0)), friction_ps=0.5, restitution=1.0, seed=2)
+    _, res = run(case)
+    c, h = res.contacts, res.history
+    x0, x1 = case.window
+    ps = c[c.kind == "ps"]
+    win = ps[(ps.x2 > x0) & (ps.x2 < x1)].groupby("time")[["fx", "fz"]].sum()
+    checked = outside = 0
+    for t, row in win.iterrows():
+        hr = h.iloc[int(np.argmin(np.abs(h.time.to_numpy() - t)))]
+        if abs(hr.time - t) > 1e-12:
+            continue
+        scale = abs(hr.window_fz)
+        assert abs(-row.fx - hr.window_fx) < 1e-3 * scale
+        assert abs(-row.fz - hr.window_fz) < 1e-3 * scale
+        outside += abs(hr.surface_fz - hr.window_fz) > 1e-3 * scale
+        checked += 1
+    assert checked >= 3 and outside == checked
+
+
 def test_no_duplicated_surface_contacts(run):
     """One contact per grain and surface point: a ridge touched by a grain is one row (the engine
     applies every row it reports, so a duplicate doubles that force)."""

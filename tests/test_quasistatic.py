@@ -20,7 +20,8 @@ def test_checks_on_real_liggghts_output():
     res = Results(pd.read_parquet(DATA / "contacts.parquet"), pd.read_parquet(DATA / "history.parquet"),
                   pd.read_parquet(DATA / "particles.parquet"))
     out = checks(case, res)
-    assert out["lost_grains"] == 0
+    # grains leave the box under the left wall with the surface and are removed (engines.device)
+    assert 0 <= out["grains_left"] <= 10 and out["grains_outside_box"] == 0
     # the max flags the grain jammed under the left wall in this soft toy case (docs/liggghts.md)
     assert 0 < out["overlap_mean_d50"] < 0.05 < out["overlap_max_d50"] < 0.5
     assert 0 <= out["platen_force_error_mean"] < 0.5 and out["quasi_static"] == (out["inertial_number"] < 1e-3)

@@ -19,6 +19,7 @@ def history(shear_disp, ratio, normal=1.0, platen_z=None):
         "time": s / 0.05, "shear_disp": s, "surface_fx": np.asarray(ratio) * normal,
         "surface_fz": -np.full(s.size, normal), "normal_force": np.full(s.size, normal),
         "platen_z": np.zeros(s.size) if platen_z is None else platen_z, "n_contacts": 100,
+        "window_fx": np.asarray(ratio) * normal, "window_fz": -np.full(s.size, normal),
     })
 
 
@@ -27,7 +28,9 @@ def test_surface_ratio_sign_and_box_ratio():
     assert st.surface_stress_ratio(h).tolist() == pytest.approx([0.3, 0.4])
     assert st.box_stress_ratio(h.assign(normal_force=-2.0)).tolist() == pytest.approx([0.3, 0.4])
     # no compressive normal force on the surface: undefined, not infinite
-    assert math.isnan(st.surface_stress_ratio(h.assign(surface_fz=0.0)).iloc[0])
+    assert math.isnan(st.surface_stress_ratio(h.assign(window_fz=0.0)).iloc[0])
+    # the ratio is the measuring window's (Case.window), not the whole surface's
+    assert st.surface_stress_ratio(h.assign(surface_fx=9.0)).tolist() == pytest.approx([0.3, 0.4])
 
 
 def test_peak_robust_to_noise():
@@ -72,9 +75,12 @@ def test_residual_and_dilation():
 
 def test_load_balance_mask():
     h = history([0, 1, 2], [0.1, 0.2, 0.3])
-    h["surface_fz"] = [-1.0, -1.2, -2.0]
+    h["window_fz"] = [-1.0, -1.2, -2.0]
     assert st.load_balanced(h).tolist() == [True, True, False]
     assert st.load_balanced(h, None).tolist() == [True, True, True]
+    # the window carries its share of the platen force: 0.8 of it here
+    h["window_fz"] = [-0.8, -1.0, -0.5]
+    assert st.load_balanced(h, share=0.8).tolist() == [True, True, False]
 
 
 def test_efficiency_example():
@@ -142,7 +148,7 @@ def test_shear_band_degenerate():
 
 
 def test_missing_columns_named():
-    with pytest.raises(MissingColumnError, match="surface_fz"):
-        st.surface_stress_ratio(pd.DataFrame({"surface_fx": [1.0]}))
+    with pytest.raises(MissingColumnError, match="window_fz"):
+        st.surface_stress_ratio(pd.DataFrame({"window_fx": [1.0]}))
     with pytest.raises(MissingColumnError, match="vx"):
         st.velocity_profile(pd.DataFrame({"snapshot": [0], "z": [0.0], "radius": [1.0]}))

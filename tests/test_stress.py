@@ -30,7 +30,9 @@ def lattice(Fx, Fz, T, n=40):
 
 
 @settings(max_examples=60, deadline=None)
-@given(ox=st.floats(0, 1), oz=st.floats(0, 1), nx=st.integers(1, 12), nz=st.integers(1, 12),
+# offsets keep the edges off the lattice lines: an edge within rounding of a line of contacts is a
+# tie between the half-open bounds (oz = 2.2e-16 dropped one row); the aligned case is tested below
+@given(ox=st.floats(1e-6, 1 - 1e-6), oz=st.floats(1e-6, 1 - 1e-6), nx=st.integers(1, 12), nz=st.integers(1, 12),
        Fx=st.floats(-5, 5), Fz=st.floats(0.1, 5), T=st.floats(-3, 3))
 def test_lattice_any_offset(ox, oz, nx, nz, Fx, Fz, T):
     rect = (ox * D + 2 * D, ox * D + (2 + nx) * D, oz * D + 1 * D, oz * D + (1 + nz) * D)
@@ -137,6 +139,7 @@ def test_sampling_rectangle_from_case():
     z0 = trace_top(case)
     assert z0 == pytest.approx(0.7e-3 + 0.35e-3, rel=1e-12)    # peak height Rt = D50, plus D50/2
     rect = sampling_rectangle(case, z0)
-    assert rect == pytest.approx((0.0, case.box_length, z0, z0 + 14e-3), rel=1e-12)
+    # the measuring window: 3 D50 off each side wall (Case.window)
+    assert rect == pytest.approx((2.1e-3, case.box_length - 2.1e-3, z0, z0 + 14e-3), rel=1e-12)
     low = sampling_rectangle(case, z0, soil_top=z0 + 5e-3)
     assert low[3] == pytest.approx(z0 + 5e-3)

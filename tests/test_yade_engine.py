@@ -104,6 +104,14 @@ def test_summed_surface_contacts_equal_the_surface_force(yrun, profile):
         assert hr.time == pytest.approx(t, abs=1e-12)
         assert -row.fz == pytest.approx(hr.surface_fz, rel=1e-3)
         assert -row.fx == pytest.approx(hr.surface_fx, rel=1e-3, abs=1e-3 * abs(hr.surface_fz))
+    # the measuring window: the 'ps' contacts of grains centred in Case.window = window_fx/fz
+    case = tiny(profile=profile)
+    x0, x1 = case.window
+    win = c[(c.kind == "ps") & (c.x2 > x0) & (c.x2 < x1)].groupby("time")[["fx", "fz"]].sum()
+    for t, row in win.iterrows():
+        hr = h.iloc[int(np.argmin(np.abs(h.time.to_numpy() - t)))]
+        assert -row.fz == pytest.approx(hr.window_fz, rel=1e-3)
+        assert -row.fx == pytest.approx(hr.window_fx, rel=1e-3, abs=1e-3 * abs(hr.window_fz))
 
 
 def test_each_grain_surface_contact_counted_once(yrun):

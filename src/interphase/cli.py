@@ -212,7 +212,7 @@ def _cmd_run_case(args) -> int:
     if res.particles is not None:
         res.particles.to_parquet(folder / "particles.parquet")
     h = res.history
-    ratio = (h.surface_fx / -h.surface_fz).rolling(9, center=True, min_periods=1).mean()
+    ratio = (h.window_fx / -h.window_fz).rolling(9, center=True, min_periods=1).mean()   # measuring window
     out = {"folder": str(folder), "contacts": str(folder / "contacts.parquet"),
            "history": str(folder / "history.parquet"), "peak_stress_ratio": float(ratio.max()),
            "n_snapshots": int(res.contacts.snapshot.nunique())}

@@ -10,7 +10,9 @@ axis with the soil moving +x relative to the surface, z up into the soil). Units
 Particles: one row per grain per snapshot (same snapshots as contacts): centre x, z [m], velocity
 vx, vz [m/s] in the analysis frame, radius [m]; for velocity profiles, shear bands, inertial number.
 History: one row per output step. surface_fx/surface_fz: force ON the surface (box test: on the
-upper half across the shear plane) [N]; normal_force: platen force [N]; platen_z [m].
+upper half across the shear plane) [N]; window_fx/window_fz: the part of it from the grains in the
+measuring window (Case.window, away from the side walls; box test: = surface_fx/fz) [N], which the
+strength analysis uses; normal_force: platen force [N]; platen_z [m].
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ CONTACT_COLUMNS = (
 )
 HISTORY_COLUMNS = (
     "time", "shear_disp", "surface_fx", "surface_fz", "normal_force", "platen_z", "n_contacts",
+    "window_fx", "window_fz",
 )
 PARTICLE_COLUMNS = ("snapshot", "time", "shear_disp", "id", "x", "z", "vx", "vz", "radius")
 CONTACT_KINDS = ("pp", "ps", "pw")

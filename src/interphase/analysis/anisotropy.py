@@ -45,7 +45,7 @@ MIN_CONTACTS = 2
 BINS = 36
 
 #: columns mirrored (x → −x) by `apply_shear_sign`; ft flips too: t = (−nz, nx) turns into (−nz, −nx)
-_X_COLUMNS = ("cx", "nx", "fx", "ft", "x1", "x2", "x", "vx", "surface_fx")
+_X_COLUMNS = ("cx", "nx", "fx", "ft", "x1", "x2", "x", "vx", "surface_fx", "window_fx")
 
 
 def apply_shear_sign(df: pd.DataFrame, shear_sign: int) -> pd.DataFrame:

@@ -5,7 +5,9 @@
   1-D50 layers, snapshots after the first). Quasi-static means I < 1e−3.
 - overlaps: max and mean contact overlap / D50.
 - platen-force error: mean and max |F − F_target| / F_target over the shear, F_target = σ·L·t.
-- lost grains: grains missing from the last snapshot, and grains outside the soil box [0, L].
+- grains that left: grains missing from the last snapshot (`grains_left`: they passed under a side
+  wall with the surface and the engine removed them, engines.device), and grains outside the soil
+  box [0, L] in it.
 Units SI; velocities in the analysis frame (the surface moves −v, so grain velocity relative to the
 surface is vx + v).
 """
@@ -33,11 +35,11 @@ def checks(case: Case, results) -> dict:
         out["inertial_number"] = inertial_number(gd, case.d50, case.normal_stress, case.density) \
             if math.isfinite(gd) else math.nan
         counts = parts.groupby("snapshot").size()
-        out["lost_grains"] = int(counts.iloc[0] - counts.iloc[-1])
+        out["grains_left"] = int(counts.iloc[0] - counts.iloc[-1])
         last = parts[parts.snapshot == parts.snapshot.max()]
         out["grains_outside_box"] = int(((last.x < 0) | (last.x > case.box_length)).sum())
     else:
-        out.update(shear_rate_max=math.nan, inertial_number=math.nan, lost_grains=-1, grains_outside_box=-1)
+        out.update(shear_rate_max=math.nan, inertial_number=math.nan, grains_left=-1, grains_outside_box=-1)
     out["quasi_static"] = bool(out["inertial_number"] < QUASI_STATIC_I) if math.isfinite(out["inertial_number"]) else False
     c = results.contacts
     ov = c.overlap.to_numpy() / case.d50 if len(c) else np.array([np.nan])

@@ -1,7 +1,8 @@
 """Interface and box strength from History, Particles and ContactTable (METHODS.md §6).
 
-Stress ratio at the surface: μs(t) = ΣFx/Σ(−Fz), F = force ON the surface [N] (History's surface_fx,
-surface_fz; or the 'ps' contacts, F = −f). In the analysis frame the soil moves +x relative to the
+Stress ratio at the surface: μs(t) = ΣFx/Σ(−Fz), F = force ON the surface [N] from the grains in
+the measuring window (History's window_fx, window_fz: Case.window, away from the side walls; or the
+'ps' contacts, F = −f). In the analysis frame the soil moves +x relative to the
 surface and the surface resists, so ΣFx > 0 and ΣFz < 0: μs > 0. Box test: τ/σ on the shear plane
 = surface_fx/|normal_force| (the lower half's horizontal force over the platen force).
 
@@ -47,11 +48,11 @@ MAX_LOAD_MISMATCH = 0.25
 # ---- series ---------------------------------------------------------------------------------
 
 def surface_stress_ratio(history: pd.DataFrame) -> pd.Series:
-    """μs(t) = surface_fx/(−surface_fz) per History row; NaN where the surface carries no
-    compressive normal force (−Fz ≤ 0)."""
-    require_columns(history, ("surface_fx", "surface_fz"), "History")
-    fx = history["surface_fx"].to_numpy(float)
-    nfz = -history["surface_fz"].to_numpy(float)
+    """μs(t) = window_fx/(−window_fz) per History row (the surface force from the grains in the
+    measuring window); NaN where it carries no compressive normal force (−Fz ≤ 0)."""
+    require_columns(history, ("window_fx", "window_fz"), "History")
+    fx = history["window_fx"].to_numpy(float)
+    nfz = -history["window_fz"].to_numpy(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         return pd.Series(np.where(nfz > 0, fx / nfz, np.nan), index=history.index, name="stress_ratio")
 
@@ -65,14 +66,16 @@ def box_stress_ratio(history: pd.DataFrame) -> pd.Series:
         return pd.Series(np.where(nf > 0, fx / nf, np.nan), index=history.index, name="stress_ratio")
 
 
-def load_balanced(history: pd.DataFrame, tolerance: float | None = MAX_LOAD_MISMATCH) -> np.ndarray:
-    """Mask of History rows where |−surface_fz − |normal_force|| ≤ tolerance·|normal_force| (the
-    surface carries the platen's load); all True when tolerance is None."""
-    require_columns(history, ("surface_fz", "normal_force"), "History")
+def load_balanced(history: pd.DataFrame, tolerance: float | None = MAX_LOAD_MISMATCH,
+                  share: float = 1.0) -> np.ndarray:
+    """Mask of History rows where |−window_fz − share·|normal_force|| ≤ tolerance·share·|normal_force|
+    (the window's part of the surface carries its share of the platen's load; share = window
+    length / box length); all True when tolerance is None."""
+    require_columns(history, ("window_fz", "normal_force"), "History")
     if tolerance is None:
         return np.ones(len(history), bool)
-    nfz = -history["surface_fz"].to_numpy(float)
-    nf = np.abs(history["normal_force"].to_numpy(float))
+    nfz = -history["window_fz"].to_numpy(float)
+    nf = share * np.abs(history["normal_force"].to_numpy(float))
     with np.errstate(invalid="ignore"):
         return np.abs(nfz - nf) <= tolerance * nf
 

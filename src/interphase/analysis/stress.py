@@ -126,9 +126,11 @@ def trace_top(case) -> float:
 
 def sampling_rectangle(case, z_bottom: float, soil_top: float | None = None,
                        height_d50: float = REGION_HEIGHT_D50) -> tuple[float, float, float, float]:
-    """(x0, x1, z0, z1) [m]: the soil box [0, L] × [z_bottom, z_bottom + 20·D50], its top lowered to
-    `soil_top` [m] when given and lower."""
+    """(x0, x1, z0, z1) [m]: the measuring window (Case.window: the soil box [0, L] less 3 D50 at each
+    side wall — a departure from METHODS.md's [0, L], see Case.window) × [z_bottom, z_bottom +
+    20·D50], its top lowered to `soil_top` [m] when given and lower."""
     top = z_bottom + height_d50 * case.d50
     if soil_top is not None and np.isfinite(soil_top):
         top = min(top, float(soil_top))
-    return (0.0, case.box_length, float(z_bottom), float(top))
+    x0, x1 = case.window
+    return (float(x0), float(x1), float(z_bottom), float(top))

@@ -17,6 +17,11 @@ Choices (where METHODS.md is silent):
 - Peak: the maximum of a centred moving average of the History stress ratio over PEAK_WINDOW_D50 ·
   D50 of shear displacement (strength.py); the state quantities come from the contact snapshot
   nearest the peak (`peak_snapshot`).
+- Measuring window (Case.window): interface tests measure over the grains whose centres lie 3 D50 or
+  more from either side wall — History's window_fx/fz for μs, the 'ps' contacts of those grains for
+  the surface anisotropy, and the sampling region's x range. A departure from METHODS.md (which
+  takes the whole surface [0, L]): grains wedged under the leading wall's edge load the surface
+  through the wall, not through the soil (docs/liggghts.md has the measurements).
 - Interface tests: the surface = 'ps' contacts; μs from History (the mesh force: dumped tangential
   forces at sliding contacts include damping, ENGINES.md, which biases sums of contact forces and
   thus θr slightly toward the shear direction on sliding flats; at sticking contacts they agree).
@@ -24,7 +29,7 @@ Choices (where METHODS.md is silent):
   half's horizontal force over the platen force, i.e. τ/σ on the shear plane); the surface
   quantities and the profile quantities are NaN with a reason; the sampling region is the whole
   specimen between its lowest and highest grain centres.
-- Sampling region (interface): [0, L] × [trace top, trace top + 20·D50], lowered to half a grain
+- Sampling region (interface): [x0, x1] of the window × [trace top, trace top + 20·D50], lowered to half a grain
   below the highest grain centre when the soil is thinner (stress.py). The trace top comes from the
   case's profile (the engines place the profile at its own z); if the 'ps' contact points disagree
   with it by more than a grain, the data win (max contact-point height + D50/2) and a note says so.
@@ -142,7 +147,8 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     # -- strength from History
     hist = history.sort_values("shear_disp", kind="stable").reset_index(drop=True)
     ratio = st.surface_stress_ratio(hist) if interface else st.box_stress_ratio(hist)
-    balanced = st.load_balanced(hist, max_load_mismatch)
+    x0, x1 = case.window                      # the tables are in the analysis frame from here on
+    balanced = st.load_balanced(hist, max_load_mismatch, share=(x1 - x0) / case.box_length)
     used = ratio.where(balanced)
     if (~balanced).any():
         reasons["history_rows_skipped"] = (f"{int((~balanced).sum())} of {len(hist)} History rows left out of the peak: "
@@ -172,7 +178,7 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     # -- surface anisotropy
     surf = None
     if interface:
-        surf = an_.surface_anisotropy(contacts, snapshots=keys)
+        surf = an_.surface_anisotropy(_in_window(contacts, x0, x1), snapshots=keys)
         row.update(theta_r_surface_deg=_first(surf, peak_snap, "theta_r_deg"),
                    theta_n_surface_deg=_first(surf, peak_snap, "theta_n_deg"),
                    a_r_surface=_first(surf, peak_snap, "ar"), a_n_surface=_first(surf, peak_snap, "an"),
@@ -203,7 +209,7 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
                 reasons["region_z0"] = (f"profile top {z0 - 0.5 * d50:.6g} m disagrees with the highest surface contact "
                                         f"point {top_pts:.6g} m: region starts at that point + D50/2")
                 z0 = top_pts + 0.5 * d50
-        rect = sampling_rectangle(case, z0, soil_top)
+        rect = (x0, x1, *sampling_rectangle(case, z0, soil_top)[2:])
     else:
         lo = float(np.nanmin(centres_z)) if centres_z.size else 0.0
         rect = (0.0, case.box_length, lo, soil_top if math.isfinite(soil_top) else lo)
@@ -283,6 +289,13 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
         series["stress_ratio_smooth"] = st.moving_average(series["shear_disp"].to_numpy(float),
                                                           used.to_numpy(float), window)
     return Summary(row=row, series=series)
+
+
+def _in_window(contacts: pd.DataFrame, x0: float, x1: float) -> pd.DataFrame:
+    """The contacts less the 'ps' ones of grains centred outside [x0, x1] (x2 = grain centre)."""
+    ps = contacts["kind"].eq("ps").to_numpy()
+    x = contacts["x2"].to_numpy(float)
+    return contacts[~ps | ((x >= x0) & (x <= x1))]
 
 
 def PEAK_WINDOW(d50: float) -> float:

@@ -99,38 +99,12 @@ def _clean(folder: Path) -> None:
             p.unlink()
 
 
-def minimal_summary(case: Case, results) -> dict:
-    """Summary from History alone, used when interphase.analysis.summary is not available.
-
-    peak_stress_ratio = max |surface_fx| / |surface_fz| [-] over the shear (force on the surface;
-    box tests: on the upper half across the shear plane), with the shear displacement there [m].
-    TODO: replaced by interphase.analysis.summary.summarise when it lands."""
-    import numpy as np
-
-    h = results.history
-    fx = np.abs(h["surface_fx"].to_numpy(float))
-    fz = np.abs(h["surface_fz"].to_numpy(float))
-    fn = np.abs(h["normal_force"].to_numpy(float))
-    load = np.where(fz > 0, fz, fn)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(load > 0, fx / load, np.nan)
-    ok = np.isfinite(ratio)
-    i = int(np.nanargmax(np.where(ok, ratio, -np.inf))) if ok.any() else None
-    return {"summary_kind": "minimal",
-            "peak_stress_ratio": float(ratio[i]) if i is not None else float("nan"),
-            "shear_disp_at_peak": float(h["shear_disp"].iloc[i]) if i is not None else float("nan"),
-            "final_stress_ratio": float(ratio[ok][-1]) if ok.any() else float("nan"),
-            "n_history": int(len(h)), "n_contacts_rows": int(len(results.contacts))}
-
-
 def summarise(case: Case, results) -> tuple[dict, object]:
-    """(flat summary row, series DataFrame or None): the analysis package's if importable."""
-    try:
-        from interphase.analysis.summary import summarise as analysis_summarise
-    except ImportError:
-        return minimal_summary(case, results), None
+    """(flat summary row, series DataFrame) of a finished case (interphase.analysis.summary)."""
+    from interphase.analysis.summary import summarise as analysis_summarise
+
     summary = analysis_summarise(case, results)
-    return dict(summary.row), getattr(summary, "series", None)
+    return dict(summary.row), summary.series
 
 
 def _failure(folder: Path, status: str, cause: str, message: str, started: float, log_tail: str = "",

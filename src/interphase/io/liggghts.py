@@ -123,7 +123,8 @@ def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
 
 def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     """history.txt → History. The first row after a `run` shows mesh forces doubled (ENGINES.md):
-    dropped. surface_fx/fz: force ON the surface (lower box) [N]; normal_force: platen force [N]."""
+    dropped. surface_fx/fz: force ON the surface (lower box) [N]; window_fx/fz: from the grains in
+    the measuring window (Case.window); normal_force: platen force [N]."""
     folder = Path(folder)
     meta = meta or _meta(folder)
     h = pd.read_csv(folder / "history.txt", sep=r"\s+")
@@ -133,6 +134,7 @@ def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
         "time": t, "shear_disp": t * meta["shear_velocity"],
         "surface_fx": h["surface_fx"], "surface_fz": h["surface_fz"],
         "normal_force": h["platen_fz"], "platen_z": h["platen_z"], "n_contacts": h["n_contacts"],
+        "window_fx": h["window_fx"], "window_fz": h["window_fz"],
     })[list(HISTORY_COLUMNS)]
 
 

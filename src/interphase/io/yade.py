@@ -137,14 +137,17 @@ def _merge_vertex_contacts(df: pd.DataFrame) -> pd.DataFrame:
 
 def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     """history.csv → History: surface_fx/fz = force ON the surface (box: the lower half) [N];
+    window_fx/fz = the part from the grains in the measuring window (Case.window);
     normal_force = force of the grains on the platen [N]; platen_z [m]."""
     folder = Path(folder)
     meta = meta or _meta(folder)
-    h = _read_csv(folder / "history.csv", ("step", "surface_fx", "surface_fz", "platen_fz", "platen_z", "n_contacts"))
+    h = _read_csv(folder / "history.csv", ("step", "surface_fx", "surface_fz", "platen_fz", "platen_z", "n_contacts",
+                                           "window_fx", "window_fz"))
     t, u = _clock(h["step"].to_numpy(), meta)
     return pd.DataFrame({"time": t, "shear_disp": u, "surface_fx": h["surface_fx"], "surface_fz": h["surface_fz"],
                          "normal_force": h["platen_fz"], "platen_z": h["platen_z"],
-                         "n_contacts": h["n_contacts"]})[list(HISTORY_COLUMNS)]
+                         "n_contacts": h["n_contacts"], "window_fx": h["window_fx"],
+                         "window_fz": h["window_fz"]})[list(HISTORY_COLUMNS)]
 
 
 def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:

@@ -1,0 +1,44 @@
+"""Regenerate tests/data/liggghts_sawtooth45/ with the current LIGGGHTS engine (about 1–2 min here).
+
+Run: .venv/bin/python tests/data/make_liggghts_sawtooth45.py [output folder]
+The case: 45° saw-tooth (Rt = D50, Sw = 2 D50), μs = 0.5, 1600 grains in a 40 × 40 D50 box (as tall
+as the study's campaigns, so that the 20 D50 sampling region is the lower half of the soil), G = 50 MPa
+(soft, so that it runs in a minute), 3 mm of shear, snapshots every 0.25 mm.
+Writes contacts/history/particles Parquet and case.json (the case and the engine parameters);
+the raw dumps are not kept (a few MB).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+from interphase.case import Case
+from interphase.engines.liggghts import Liggghts
+from interphase.surface.spec import ProfileSpec
+
+CASE = Case(test="interface", profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), friction_ps=0.5,
+            shear_modulus=50e6, n_grains=1600, box_length_d50=40, box_height_d50=40,
+            shear_distance=3e-3, snapshot_every=0.25e-3, seed=1)
+
+
+def main(out: Path) -> None:
+    eng = Liggghts()
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        eng.write_input(CASE, tmp)
+        eng.execute(tmp)
+        res = eng.read_results(tmp)
+        params = json.loads(Path(tmp, "engine.json").read_text())
+    res.contacts.to_parquet(out / "contacts.parquet", index=False)
+    res.history.to_parquet(out / "history.parquet", index=False)
+    res.particles.to_parquet(out / "particles.parquet", index=False)
+    (out / "case.json").write_text(json.dumps({"case": CASE.canonical(), "engine": eng.name,
+                                               "engine_version": eng.version(), "engine_params": params},
+                                              indent=1, default=float))
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "liggghts_sawtooth45")
