@@ -271,7 +271,7 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     # -- profile quantities
     _profile_features(case, row, reasons)
 
-    # -- quasi-static checks of the run (overlaps, platen-force error, lost grains); I is above
+    # -- quasi-static checks of the run (overlaps, platen-force error, grains that left); I is above
     from interphase.analysis.quasistatic import checks
 
     for k, v in checks(case, results).items():
