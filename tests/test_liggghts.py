@@ -271,27 +271,24 @@ def test_grains_leaving_under_a_side_wall_are_removed_not_lost(run):
     """Spaced saw-tooth (2 D50 of flat between teeth), μs = 0.2, seed 1: grains on the flats slide
     out under the left wall; before the side openings deleted them, one met the next tooth outside
     the box and was shot out of the domain (Lost atoms). Now the run finishes, the grains that left
-    are counted in History, and none vanished otherwise."""
+    are counted in balance.txt, and none vanished otherwise."""
     case = tiny(profile=("sawtooth", dict(rt=1, sw=2, sr=2)), friction_ps=0.2, seed=1)
     folder, res = run(case)
-    h = np.loadtxt(folder / "history.txt", skiprows=1)
-    names = (folder / "history.txt").read_text().split("\n", 1)[0].split()
-    removed = h[:, names.index("n_removed")]
-    assert removed[-1] >= 1
-    assert (h[:, names.index("n_grains")] + removed >= case.n_grains).all()
+    b = np.loadtxt(folder / "balance.txt", skiprows=1)
+    assert b[-1, 2] >= 1
+    assert (b[:, 1] + b[:, 2] >= case.n_grains).all()
     counts = res.particles.groupby("snapshot").size()
-    assert counts.iloc[0] - counts.iloc[-1] <= removed[-1]
+    assert counts.iloc[0] - counts.iloc[-1] <= b[-1, 2]
 
 
 def test_grain_balance_names_a_leak(tmp_path):
-    """check_grain_balance reads history.txt: grains + removed < placed is a leak (the run's
-    `thermo_modify lost warn` during the shear would otherwise hide it)."""
+    """check_grain_balance reads balance.txt: grains + removed < placed is a leak (the deck's
+    `thermo_modify lost warn` would otherwise hide it)."""
     from interphase.engines.liggghts import check_grain_balance
 
     (tmp_path / "engine.json").write_text('{"n_grains": 200}')
-    head = "step surface_fx surface_fz platen_fz platen_z n_contacts window_fx window_fz n_grains n_removed\n"
-    (tmp_path / "history.txt").write_text(head + "100 0 -1 1 0 300 0 -1 200 0\n200 0 -1 1 0 300 0 -1 199 1\n")
+    head = "step n_grains n_removed\n"
+    (tmp_path / "balance.txt").write_text(head + "0 200 0\n100 200 1\n200 199 1\n")
     assert check_grain_balance(tmp_path) is None
-    (tmp_path / "history.txt").write_text(head + "100 0 -1 1 0 300 0 -1 200 0\n200 0 -1 1 0 300 0 -1 197 1\n")
-    msg = check_grain_balance(tmp_path)
-    assert "2 grain(s) left the domain by 200" in msg
+    (tmp_path / "balance.txt").write_text(head + "0 200 0\n100 199 0\n200 197 1\n")
+    assert "1 grain(s) left the domain by step 100" in check_grain_balance(tmp_path)

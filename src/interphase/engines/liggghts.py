@@ -209,7 +209,7 @@ class Liggghts(Engine):
         log = folder / "engine.log"
         rc = run_logged(cmd, folder, env, timeout, "LIGGGHTS")
         text = log_tail(log, 60)
-        leak = check_grain_balance(folder) if (folder / "history.txt").exists() else None
+        leak = check_grain_balance(folder)
         if leak:
             raise EngineError("lost_atoms", leak, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
         cause = classify(rc, text)
@@ -230,22 +230,24 @@ class Liggghts(Engine):
 def check_grain_balance(folder: Path) -> str | None:
     """A message if grains vanished other than through the side openings, else None.
 
-    Every history row must satisfy grains in the run + grains deleted at the openings ≥ grains
-    placed (engine.json n_grains; '>' while a counted grain awaits deletion at the next neighbour
-    list build); LIGGGHTS itself only warns once (thermo_modify lost warn)."""
+    balance.txt (interface decks, every thermo interval from step 0): grains in the run + grains
+    deleted at the openings must stay ≥ grains placed (engine.json n_grains; '>' while a counted
+    grain awaits deletion at the next neighbour-list build). LIGGGHTS itself only warns
+    (thermo_modify lost warn), because its atom total ignores the deletions."""
     import json
 
-    n0 = json.loads((folder / "engine.json").read_text())["n_grains"]
-    h = np.loadtxt(folder / "history.txt", skiprows=1, ndmin=2)
-    if not h.size:
+    path = folder / "balance.txt"
+    if not path.exists():
         return None
-    names = (folder / "history.txt").read_text().split("\n", 1)[0].split()
-    na, nout = h[:, names.index("n_grains")], h[:, names.index("n_removed")]
-    bad = np.flatnonzero(na + nout < n0)
+    n0 = json.loads((folder / "engine.json").read_text())["n_grains"]
+    b = np.loadtxt(path, skiprows=1, ndmin=2)
+    if not b.size:
+        return None
+    bad = np.flatnonzero(b[:, 1] + b[:, 2] < n0)
     if bad.size:
-        i = bad[0]
-        return (f"Lost atoms: {n0 - int(na[i]) - int(nout[i])} grain(s) left the domain by {int(h[i, 0])} "
-                f"(history.txt: {int(na[i])} in the run + {int(nout[i])} removed at the side openings < {n0} placed)")
+        step, na, nout = b[bad[0]]
+        return (f"Lost atoms: {n0 - int(na) - int(nout)} grain(s) left the domain by step {int(step)} "
+                f"(balance.txt: {int(na)} in the run + {int(nout)} removed at the side openings < {n0} placed)")
     return None
 
 
