@@ -143,3 +143,25 @@ def test_a_crosscheck_file_is_a_campaign_too(tiny_campaign):
 def test_missing_file_is_an_input_error(tmp_path):
     with pytest.raises(InputError, match="cannot read"):
         crosscheck(tmp_path / "nope.toml", run=False)
+
+
+def test_interrupted_run_stops_the_crosscheck(tmp_path, monkeypatch):
+    """Ctrl-C / SIGTERM during the first engine's runs must stop the cross-check, not go on to the
+    second engine (it did: the interrupted LIGGGHTS half returned and YADE started). run_campaign is
+    replaced by one that reports an interruption; the real interruption path of run_campaign is
+    tested in tests/test_campaign_run.py."""
+    from interphase.campaign import run as run_mod
+    from interphase.campaign.run import RunReport
+
+    calls = []
+
+    def interrupted_run(path, *, engine=None, **kw):
+        calls.append(engine)
+        return RunReport(campaign="xc-tiny", output=tmp_path, interrupted=True)
+
+    monkeypatch.setattr(run_mod, "run_campaign", interrupted_run)
+    f = tmp_path / "xc.toml"
+    f.write_text(CAMPAIGN)
+    with pytest.raises(KeyboardInterrupt):
+        crosscheck(f, output=tmp_path / "out")
+    assert calls == ["liggghts"]

@@ -220,8 +220,10 @@ def crosscheck(path, *, jobs: int | None = None, output=None, rerun_failed: bool
     try:
         if run:
             for engine in ENGINES:
-                run_campaign(readable, engine=engine, jobs=jobs, rerun_failed=rerun_failed, output=output,
-                             stream=stream, live=False)
+                report = run_campaign(readable, engine=engine, jobs=jobs, rerun_failed=rerun_failed,
+                                      output=output, stream=stream, live=False)
+                if report.interrupted:      # Ctrl-C / SIGTERM stops the cross-check, not one engine's half
+                    raise KeyboardInterrupt
         planned = plan(campaign, list(ENGINES))
     finally:
         cleanup()
