@@ -28,7 +28,6 @@ from pathlib import Path
 
 import numpy as np
 
-
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for

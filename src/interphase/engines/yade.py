@@ -3,9 +3,10 @@
 The geometry is the LIGGGHTS deck's (engines/liggghts.py), built from the same packing
 (engines/packing.lattice_packing) and the same surface profile:
   interface: soil box [0, L] between fixed side walls whose bottoms sit above the surface's
-    highest point (`engines.device.side_walls`, as LIGGGHTS); the rough surface slides −x beneath it at the shear velocity;
-    a platen servo holds σ·L·t on top (t = D50, the quasi-2D thickness). History also carries
-    window_fx/fz, the force on the surface from the grains in Case.window.
+    highest point (`engines.device.side_walls`, as LIGGGHTS); the rough surface slides −x beneath
+    it at the shear velocity; a platen servo holds σ·L·t on top (t = D50, the quasi-2D thickness).
+    History also carries window_fx/fz, the force on the surface from the grains in Case.window;
+    grains whose centres pass under a side wall are erased (LIGGGHTS' side openings).
   box: a direct shear box of height H split at H/2, lower half (bottom, sides, right flange) slides −x.
 Walls are facets, one triangle per segment with an edge in the grain plane y = 0
 (surface.mesh.inplane_triangles); a grain at a convex surface vertex touches two facets at the same
