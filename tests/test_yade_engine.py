@@ -69,6 +69,14 @@ def test_flat_surface_ratio_equals_particle_surface_friction(yrun):
         assert steady_ratio(res.history) == pytest.approx(mu, abs=0.05 if mu else 0.01)
 
 
+def test_grains_roll_on_a_flat_without_rolling_resistance(yrun):
+    """μr = 0: bottom grains may roll, so a rough flat (μs = 0.5) mobilises less than μs. With the
+    former mapping (eta = 0, krot > 0: YADE's rolling spring then has no cap) every grain slid and
+    the ratio was exactly 0.500 for the whole shear."""
+    _, res = yrun(tiny(friction_ps=0.5, rolling_friction=0.0))
+    assert steady_ratio(res.history) < 0.45
+
+
 def test_sawtooth_is_clearly_stronger_than_flat(yrun):
     _, flat = yrun(tiny(friction_ps=0.5))
     _, saw = yrun(tiny(profile=SAW, friction_ps=0.5))

@@ -75,7 +75,8 @@ def contact_parameters(case: Case) -> dict:
       grain–grain cap for equal grains (the bulk); wall contacts then get eta·R_mean = 0.75·μr·r
       (R_mean = 1.5r with the facet's refR1 = 2r) where LIGGGHTS has μr·r.
       krot [N·m/rad] (one constant, YADE's limitation) = ks(δ = 0.3 % D50)·(D50/2)², so the cap is
-      reached after a rotation of a few 1e−3 rad: close to cdt's constant torque.
+      reached after a rotation of a few 1e−3 rad: close to cdt's constant torque. μr = 0 → krot = 0
+      (YADE applies no cap when eta = 0).
     """
     e = case.restitution
     beta = 0.0 if e >= 1 else abs(math.log(e)) / math.sqrt(math.log(e) ** 2 + math.pi ** 2)
@@ -86,7 +87,11 @@ def contact_parameters(case: Case) -> dict:
     E = youngs_modulus(case.shear_modulus, case.poisson)
     return dict(E=E, E_wall=E * FACET_STIFFENING, nu=case.poisson, density=case.density,
                 mu_pp=case.friction_pp, mu_ps=case.friction_ps if case.test == "interface" else case.friction_pw,
-                mu_pw=case.friction_pw, betan=b, betas=b, eta=case.rolling_friction / 2, krot=ks * r50 ** 2)
+                mu_pw=case.friction_pw, betan=b, betas=b, eta=case.rolling_friction / 2,
+                # YADE caps the rolling moment only when eta·R·Fn > 0 (Law2_ScGeom_MindlinPhys_Mindlin:
+                # `if (MomentMax > 0)`): eta = 0 with krot > 0 is an UNLIMITED rolling spring, and
+                # grains on a flat could not roll at all (μs = 0.5 gave exactly 0.500, measured)
+                krot=ks * r50 ** 2 if case.rolling_friction > 0 else 0.0)
 
 
 def _inplane(segments, width: float) -> list[list[float]]:
