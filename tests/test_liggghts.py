@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from interphase.case import Case
@@ -95,6 +96,52 @@ class TestLiggghtsReader(ReaderContract):
     @pytest.fixture
     def finished(self, run):           # `run` caches per session: the case runs once
         return run(tiny(friction_ps=0.2))
+
+
+
+def _copy_finished(run, tmp_path):
+    import shutil
+    folder, res = run(tiny(friction_ps=0.2))
+    shutil.copytree(folder, tmp_path / "case")
+    return tmp_path / "case", res
+
+
+def test_truncated_dump_is_refused_with_the_file_named(engine, run, tmp_path):
+    folder, _ = _copy_finished(run, tmp_path)
+    dump = folder / "contacts_pair.dump"
+    raw = dump.read_bytes()
+    dump.write_bytes(raw[: len(raw) - 500])            # the engine died mid-write
+    with pytest.raises(InputError, match="contacts_pair.dump") as err:
+        engine.read_results(folder)
+    assert "rerun" in err.value.fix
+
+
+def test_block_with_other_columns_is_refused(engine, run, tmp_path):
+    folder, _ = _copy_finished(run, tmp_path)
+    dump = folder / "particles.dump"
+    text = dump.read_text()
+    last = text.rindex("ITEM: ATOMS id x z vx vz radius")
+    dump.write_text(text[:last] + text[last:].replace("ITEM: ATOMS id x z vx vz radius", "ITEM: ATOMS id z x vx vz radius", 1))
+    with pytest.raises(InputError, match="particles.dump"):
+        engine.read_results(folder)
+
+
+def test_dump_missing_a_column_is_refused_with_its_name(engine, run, tmp_path):
+    folder, _ = _copy_finished(run, tmp_path)
+    dump = folder / "contacts_wall.dump"
+    dump.write_text(dump.read_text().replace("c_wc[20]", "c_wc[99]"))
+    with pytest.raises(InputError, match=r"c_wc\[20\]") as err:
+        engine.read_results(folder)
+    assert err.value.where.endswith("contacts_wall.dump")
+
+
+def test_irregular_whitespace_reads_the_same(engine, run, tmp_path):
+    folder, res = _copy_finished(run, tmp_path)
+    dump = folder / "contacts_wall.dump"
+    lines = dump.read_text().splitlines(keepends=True)   # the bulk CSV pass refuses doubled spaces; loadtxt reads them
+    dump.write_text("".join(ln if ln.startswith("ITEM") else ln.replace(" ", "  ") for ln in lines))
+    again = engine.read_results(folder)
+    pd.testing.assert_frame_equal(again.contacts, res.contacts)
 
 
 def test_summed_surface_contacts_equal_mesh_force(run):

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from interphase.surface.normals import principal_direction, segment_normals, theta_a
+from interphase.surface.normals import principal_direction, segment_normals, theta_a, theta_a_filters
 from interphase.surface.profiles import Profile, flat, random_profile, sawtooth
 from interphase.surface.roughness import rn
 from interphase.surface.trace import centroid_trace, dilate_half_disk
@@ -182,3 +182,9 @@ def test_scaling_x_z_d50_together(scale, shape):
     b = theta_a(p.scaled(scale), D50 * scale, 92)
     assert b.theta_a_deg == pytest.approx(a.theta_a_deg, abs=1e-6)
     assert b.rn == pytest.approx(a.rn, abs=1e-6)
+
+
+def test_both_filters_from_one_trace_equal_the_single_filter_calls():
+    p = random_profile(2, 1, 2, d50=D50, length=30 * D50, seed=4)
+    both = theta_a_filters(p, D50, (92, 90))
+    assert both[92] == theta_a(p, D50, 92) and both[90] == theta_a(p, D50, 90)

@@ -351,7 +351,7 @@ def _cmd_predict(args) -> int:
     import math
 
     from interphase.analysis.criterion import CriterionModel, predict, regular_flat_spacing
-    from interphase.surface.normals import theta_a
+    from interphase.surface.normals import theta_a_filters
 
     d50 = _d50_m(args.d50)
     if not (math.isfinite(args.friction) and args.friction >= 0):
@@ -359,7 +359,8 @@ def _cmd_predict(args) -> int:
     if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
         raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
     prof = _load_measured(args.profile, args.units)
-    t92, t90 = theta_a(prof, d50, 92), theta_a(prof, d50, 90)
+    t = theta_a_filters(prof, d50, (92, 90))
+    t92, t90 = t[92], t[90]
     flat_spaced, why = regular_flat_spacing(prof.x, prof.z, d50)
     if args.fit:
         from interphase.report.build import fitted_model

@@ -330,12 +330,11 @@ def _profile_features(case, row: dict, reasons: dict) -> None:
         for k in keys:
             reasons[k] = "box test: no surface profile"
         return
-    from interphase.surface.normals import theta_a
+    from interphase.surface.normals import theta_a_filters
     from interphase.surface.profiles import from_spec
 
-    prof = from_spec(case.profile, case.d50, case.box_length)
-    t92 = theta_a(prof, case.d50, 92)
-    t90 = theta_a(prof, case.d50, 90)
+    t = theta_a_filters(from_spec(case.profile, case.d50, case.box_length), case.d50, (92, 90))
+    t92, t90 = t[92], t[90]
     row.update(theta_a_deg_92=t92.theta_a_deg, theta_a_deg_90=t90.theta_a_deg, rn=t92.rn, rnc=t92.rnc,
                mean_slope_deg=t92.mean_slope_deg)
     if t92.reason:

@@ -1,8 +1,8 @@
 """LIGGGHTS output → ContactTable / History / Particles (interphase.tables), vectorised.
 
-Dumps are split into ITEM blocks with one regular-expression pass over the file; each block's rows
-are parsed in bulk by numpy and its columns looked up by the header names (`ITEM: ENTRIES c_pc[1]
-…`, `ITEM: ATOMS id x z …`). Column meaning of compute pair/gran/local and wall/gran/local (fixed
+Dumps are split into ITEM blocks with one regular-expression pass over the file; the rows of all
+blocks are parsed in one bulk pass and their columns looked up by the header names
+(`ITEM: ENTRIES c_pc[1] …`, `ITEM: ATOMS id x z …`). Column meaning of compute pair/gran/local and wall/gran/local (fixed
 order in LIGGGHTS 3.8.0, ENGINES.md): pairs 1-3 centre i, 4-6 centre j, 7-9 id i, id j, periodic
 flag, 10-12 force on i, 13-18 normal/tangential parts, 19 area, 20 overlap, 21-23 contact point;
 walls 1-3 contact point, 4-6 particle centre, 7-9 mesh index, triangle id, particle id, 10-12 force
@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.csv as pacsv
 
 from interphase.engines.base import Results
 from interphase.errors import InputError
@@ -31,24 +33,58 @@ _BLOCK = re.compile(
     rb"(?:[^\n]*\n){3}ITEM: (?:ENTRIES|ATOMS) ([^\n]*)\n")
 
 
-def read_dump_blocks(path: str | Path) -> list[tuple[int, pd.DataFrame]]:
-    """[(timestep, DataFrame with the header's column names)] for a LAMMPS/LIGGGHTS text dump."""
-    raw = Path(path).read_bytes()
-    out = []
+def read_dump(path: str | Path) -> pd.DataFrame:
+    """Every block of a LAMMPS/LIGGGHTS text dump in one table: the header's column names plus
+    `timestep`. All blocks must share the header (interphase decks write one fixed column list).
+
+    The block bodies are joined and parsed in one pass by pyarrow's CSV reader (rows end in a space,
+    so there is one empty trailing field); numpy's loadtxt takes over for irregular whitespace."""
+    path = Path(path)
+    raw = path.read_bytes()
     matches = list(_BLOCK.finditer(raw))
-    for k, m in enumerate(matches):
-        step, count, names = int(m.group(1)), int(m.group(2)), m.group(3).decode().split()
-        end = matches[k + 1].start() if k + 1 < len(matches) else len(raw)
-        body = raw[m.end():end]
-        if count == 0:
-            data = np.empty((0, len(names)))
-        else:
+    if not matches:
+        return pd.DataFrame({"timestep": pd.Series(dtype=np.int64)})
+    names = matches[0].group(3).decode().split()
+    for m in matches[1:]:
+        if m.group(3).decode().split() != names:
+            raise InputError(f"block at step {int(m.group(1))} has columns {m.group(3).decode().strip()!r}, "
+                             f"the first block {' '.join(names)!r}", where=str(path),
+                             fix="write one column list per dump file (the interphase decks do)")
+    steps = np.array([int(m.group(1)) for m in matches], dtype=np.int64)
+    counts = np.array([int(m.group(2)) for m in matches], dtype=np.int64)
+    ends = [m.start() for m in matches[1:]] + [len(raw)]
+    body = b"".join(raw[m.end():e] for m, e in zip(matches, ends))
+    data = _parse_rows(body, len(names), int(counts.sum()), path)
+    df = pd.DataFrame(data, columns=names)
+    df["timestep"] = np.repeat(steps, counts)
+    df.attrs["path"] = str(path)
+    return df
+
+
+def _parse_rows(body: bytes, n_cols: int, n_rows: int, path: Path) -> np.ndarray:
+    """rows × n_cols float array of whitespace-separated numbers; InputError if the count is off."""
+    msg = f"the blocks do not hold the {n_rows}×{n_cols} numbers their headers announce"
+    bad = InputError(msg, where=str(path), fix="the dump is truncated or corrupt: rerun the case")
+    if not body.strip():
+        if n_rows:
+            raise bad
+        return np.empty((0, n_cols))
+    try:
+        table = pacsv.read_csv(pa.py_buffer(body),
+                               read_options=pacsv.ReadOptions(autogenerate_column_names=True),
+                               parse_options=pacsv.ParseOptions(delimiter=" "))
+        extra = table.columns[n_cols:]
+        if table.num_columns < n_cols or any(c.null_count != len(c) for c in extra):
+            raise ValueError("irregular columns")
+        data = np.column_stack([c.to_numpy().astype(float, copy=False) for c in table.columns[:n_cols]])
+    except (pa.ArrowInvalid, ValueError):
+        try:   # irregular whitespace, or a damaged file that loadtxt will name
             data = np.loadtxt(io.BytesIO(body), ndmin=2)
-            if data.shape != (count, len(names)):
-                raise InputError(f"block at step {step} has {data.shape} values, header says {count}×{len(names)}",
-                                 where=str(path), fix="the dump is truncated or corrupt: rerun the case")
-        out.append((step, pd.DataFrame(data, columns=names)))
-    return out
+        except ValueError as exc:
+            raise InputError(f"{msg}: {exc}", where=str(path), fix=bad.fix) from None
+    if data.shape != (n_rows, n_cols):
+        raise bad
+    return data
 
 
 def _shear_start(meta: dict) -> int:
@@ -67,58 +103,59 @@ def _meta(folder: Path) -> dict:
 
 
 def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
-    """Columns c_ID[first..last] looked up by name."""
-    return df[[f"{prefix}[{i}]" for i in range(first, last + 1)]].to_numpy()
+    """Columns c_ID[first..last] looked up by name; InputError naming a missing one."""
+    names = [f"{prefix}[{i}]" for i in range(first, last + 1)]
+    missing = [n for n in names if n not in df.columns]
+    if missing:
+        raise InputError(f"column {missing[0]} is missing from the dump's header", where=df.attrs.get("path", "dump"),
+                         fix="the deck's compute must write every column (ENGINES.md): re-render and rerun")
+    return df[names].to_numpy()
 
 
-def _contacts_from_blocks(blocks, prefix: str, wall: bool, meta: dict) -> pd.DataFrame:
-    frames = []
-    for step, df in blocks:
-        if df.empty:
-            continue
-        if wall:
-            p1 = _cols(df, prefix, 1, 3)            # contact point on the mesh
-            p2 = _cols(df, prefix, 4, 6)            # particle centre
-            mesh, pid = df[f"{prefix}[7]"].to_numpy(), df[f"{prefix}[9]"].to_numpy()
-            id1, id2 = -1 - mesh, pid
-            f2 = _cols(df, prefix, 10, 12)          # force on the particle = body 2
-            kind = np.where(mesh == 0, "ps", "pw")
-            cpt = p1
-        else:
-            p1, p2 = _cols(df, prefix, 1, 3), _cols(df, prefix, 4, 6)
-            id1, id2 = df[f"{prefix}[7]"].to_numpy(), df[f"{prefix}[8]"].to_numpy()
-            f2 = -_cols(df, prefix, 10, 12)         # the dump gives the force on i; body 2 = j
-            kind = np.full(len(df), "pp")
-            cpt = _cols(df, prefix, 21, 23)
-        branch = p2 - p1
-        nrm = np.linalg.norm(branch[:, [0, 2]], axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            nx, nz = branch[:, 0] / nrm, branch[:, 2] / nrm
-        fx, fz = f2[:, 0], f2[:, 2]
-        t = (step - _shear_start(meta)) * meta["dt"]
-        frames.append(pd.DataFrame({
-            "snapshot": step, "time": t, "shear_disp": t * meta["shear_velocity"], "kind": kind,
-            "id1": id1.astype(np.int64), "id2": id2.astype(np.int64),
-            "cx": cpt[:, 0], "cz": cpt[:, 2], "nx": nx, "nz": nz,
-            "fn": fx * nx + fz * nz, "ft": -fx * nz + fz * nx, "fx": fx, "fz": fz,
-            "x1": p1[:, 0], "z1": p1[:, 2], "x2": p2[:, 0], "z2": p2[:, 2],
-            "overlap": df[f"{prefix}[20]"].to_numpy(),
-        }))
-    if not frames:
-        return pd.DataFrame({c: pd.Series(dtype=float) for c in CONTACT_COLUMNS})
-    return pd.concat(frames, ignore_index=True)
+def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -> dict[str, np.ndarray]:
+    """ContactTable columns (kind as codes 0 pp, 1 ps, 2 pw) for every row of a local dump."""
+    if wall:
+        p1 = _cols(df, prefix, 1, 3)            # contact point on the mesh
+        p2 = _cols(df, prefix, 4, 6)            # particle centre
+        mesh, pid = _cols(df, prefix, 7, 7)[:, 0], _cols(df, prefix, 9, 9)[:, 0]
+        id1, id2 = -1 - mesh, pid
+        f2 = _cols(df, prefix, 10, 12)          # force on the particle = body 2
+        kind = np.where(mesh == 0, 1, 2).astype(np.int8)
+        cpt = p1
+    else:
+        p1, p2 = _cols(df, prefix, 1, 3), _cols(df, prefix, 4, 6)
+        id1, id2 = _cols(df, prefix, 7, 7)[:, 0], _cols(df, prefix, 8, 8)[:, 0]
+        f2 = -_cols(df, prefix, 10, 12)         # the dump gives the force on i; body 2 = j
+        kind = np.zeros(len(df), np.int8)
+        cpt = _cols(df, prefix, 21, 23)
+    branch = p2 - p1
+    nrm = np.hypot(branch[:, 0], branch[:, 2])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nx, nz = branch[:, 0] / nrm, branch[:, 2] / nrm
+    fx, fz = f2[:, 0], f2[:, 2]
+    t = (df["timestep"].to_numpy() - _shear_start(meta)) * meta["dt"]
+    return {
+        "snapshot": df["timestep"].to_numpy(), "time": t, "shear_disp": t * meta["shear_velocity"], "kind": kind,
+        "id1": id1.astype(np.int64), "id2": id2.astype(np.int64),
+        "cx": cpt[:, 0], "cz": cpt[:, 2], "nx": nx, "nz": nz,
+        "fn": fx * nx + fz * nz, "ft": -fx * nz + fz * nx, "fx": fx, "fz": fz,
+        "x1": p1[:, 0], "z1": p1[:, 2], "x2": p2[:, 0], "z2": p2[:, 2],
+        "overlap": _cols(df, prefix, 20, 20)[:, 0],
+    }
 
 
 def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
     meta = meta or _meta(folder)
-    pairs = _contacts_from_blocks(read_dump_blocks(folder / "contacts_pair.dump"), "c_pc", False, meta)
-    walls = _contacts_from_blocks(read_dump_blocks(folder / "contacts_wall.dump"), "c_wc", True, meta)
-    out = pd.concat([pairs, walls], ignore_index=True)
-    out["kind"] = pd.Categorical(out["kind"], categories=["pp", "ps", "pw"])
-    snaps = np.sort(out["snapshot"].unique())
-    out["snapshot"] = np.searchsorted(snaps, out["snapshot"]).astype(np.int64)   # 0, 1, 2 … in time order
-    return out.sort_values(["snapshot", "kind", "id1", "id2"], kind="stable").reset_index(drop=True)[list(CONTACT_COLUMNS)]
+    parts = [_contacts_from_dump(read_dump(folder / "contacts_pair.dump"), "c_pc", False, meta),
+             _contacts_from_dump(read_dump(folder / "contacts_wall.dump"), "c_wc", True, meta)]
+    cols = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
+    steps = np.unique(cols["snapshot"])
+    cols["snapshot"] = np.searchsorted(steps, cols["snapshot"]).astype(np.int64)   # 0, 1, 2 … in time order
+    order = np.lexsort((cols["id2"], cols["id1"], cols["kind"], cols["snapshot"]))
+    cols = {c: v[order] for c, v in cols.items()}
+    cols["kind"] = pd.Categorical.from_codes(cols["kind"], categories=["pp", "ps", "pw"])
+    return pd.DataFrame(cols)[list(CONTACT_COLUMNS)]
 
 
 def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
@@ -141,14 +178,13 @@ def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
 def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
     meta = meta or _meta(folder)
-    frames = []
-    blocks = read_dump_blocks(folder / "particles.dump")
-    for k, (step, df) in enumerate(blocks):
-        t = (step - _shear_start(meta)) * meta["dt"]
-        frames.append(pd.DataFrame({"snapshot": k, "time": t, "shear_disp": t * meta["shear_velocity"],
-                                    "id": df["id"].astype(np.int64), "x": df["x"], "z": df["z"],
-                                    "vx": df["vx"], "vz": df["vz"], "radius": df["radius"]}))
-    return pd.concat(frames, ignore_index=True)[list(PARTICLE_COLUMNS)]
+    df = read_dump(folder / "particles.dump")
+    steps = df["timestep"].to_numpy()
+    t = (steps - _shear_start(meta)) * meta["dt"]
+    return pd.DataFrame({"snapshot": np.unique(steps, return_inverse=True)[1].astype(np.int64), "time": t,
+                         "shear_disp": t * meta["shear_velocity"], "id": df["id"].to_numpy().astype(np.int64),
+                         "x": df["x"].to_numpy(), "z": df["z"].to_numpy(), "vx": df["vx"].to_numpy(),
+                         "vz": df["vz"].to_numpy(), "radius": df["radius"].to_numpy()})[list(PARTICLE_COLUMNS)]
 
 
 def read_folder(folder: str | Path) -> Results:

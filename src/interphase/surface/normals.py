@@ -83,28 +83,35 @@ class ThetaA:
 
 def theta_a(profile: Profile, d50: float, filt: int = 92, dx: float | None = None) -> ThetaA:
     """θa of `profile` [m] for grains of median diameter d50 [m] (METHODS.md §2–4)."""
-    if filt not in FILTERS:
-        raise InputError(f"unknown filter {filt!r}", where="--filter", fix="use 92 or 90")
+    return theta_a_filters(profile, d50, (filt,), dx)[filt]
+
+
+def theta_a_filters(profile: Profile, d50: float, filters=FILTERS, dx: float | None = None) -> dict[int, ThetaA]:
+    """{filter: ThetaA} from one centroid trace (the trace is the expensive part)."""
+    for filt in filters:
+        if filt not in FILTERS:
+            raise InputError(f"unknown filter {filt!r}", where="--filter", fix="use 92 or 90")
     trace = centroid_trace(profile, d50, dx)
     theta, w = segment_normals(trace)
-    keep = keep_mask(theta, filt)
-    ccw = principal_direction(theta[keep], w[keep])
     tilt = float(np.max(np.abs(np.degrees(theta) - 90.0))) if theta.size else 0.0
-    reason = ""
-    if math.isnan(ccw) or (filt == 90 and not np.any(theta[keep] > math.radians(90.0) + 1e-12)):
-        reason = (f"non-dilative: no centroid-trace normal beyond the {filt}° filter at D50 = {d50 * 1e3:g} mm "
-                  f"(largest normal tilt {tilt:.3g}°)")
-        ccw = math.nan
-    return ThetaA(
-        theta_a_deg=math.degrees(ccw) - 90.0 if not math.isnan(ccw) else math.nan,
-        theta_a_ccw_deg=math.degrees(ccw) if not math.isnan(ccw) else math.nan,
-        filter=filt, d50=d50,
-        rn=_rn(profile, d50),
-        rnc=_rn(trace, d50),
-        mean_slope_deg=mean_asperity_slope_deg(profile),
-        n_points=int(trace.x.size),
-        kept_fraction=float(w[keep].sum() / w.sum()) if w.sum() > 0 else 0.0,
-        max_tilt_deg=tilt,
-        dilative=not math.isnan(ccw),
-        reason=reason,
-    )
+    shared = dict(d50=d50, rn=_rn(profile, d50), rnc=_rn(trace, d50), mean_slope_deg=mean_asperity_slope_deg(profile),
+                  n_points=int(trace.x.size), max_tilt_deg=tilt)
+    out = {}
+    for filt in filters:
+        keep = keep_mask(theta, filt)
+        ccw = principal_direction(theta[keep], w[keep])
+        reason = ""
+        if math.isnan(ccw) or (filt == 90 and not np.any(theta[keep] > math.radians(90.0) + 1e-12)):
+            reason = (f"non-dilative: no centroid-trace normal beyond the {filt}° filter at D50 = {d50 * 1e3:g} mm "
+                      f"(largest normal tilt {tilt:.3g}°)")
+            ccw = math.nan
+        out[filt] = ThetaA(
+            theta_a_deg=math.degrees(ccw) - 90.0 if not math.isnan(ccw) else math.nan,
+            theta_a_ccw_deg=math.degrees(ccw) if not math.isnan(ccw) else math.nan,
+            filter=filt,
+            kept_fraction=float(w[keep].sum() / w.sum()) if w.sum() > 0 else 0.0,
+            dilative=not math.isnan(ccw),
+            reason=reason,
+            **shared,
+        )
+    return out
