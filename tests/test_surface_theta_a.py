@@ -188,3 +188,13 @@ def test_both_filters_from_one_trace_equal_the_single_filter_calls():
     p = random_profile(2, 1, 2, d50=D50, length=30 * D50, seed=4)
     both = theta_a_filters(p, D50, (92, 90))
     assert both[92] == theta_a(p, D50, 92) and both[90] == theta_a(p, D50, 90)
+
+
+@pytest.mark.parametrize("rt, sw, sr", [(1, 2, 0), (1, 2, 2), (0.5, 0.4, 0.3)])
+def test_one_period_of_a_sawtooth_gives_the_whole_profiles_values(rt, sw, sr):
+    """The summary computes θa on one period (analysis.summary._profile_features)."""
+    whole = theta_a_filters(sawtooth(rt, sw, sr, d50=D50, length=50 * D50), D50)
+    one = theta_a_filters(sawtooth(rt, sw, sr, d50=D50, periods=1), D50)
+    for f in (92, 90):
+        for key in ("theta_a_deg", "rn", "rnc", "mean_slope_deg"):
+            assert getattr(one[f], key) == pytest.approx(getattr(whole[f], key), rel=1e-9, abs=1e-9)

@@ -333,7 +333,10 @@ def _profile_features(case, row: dict, reasons: dict) -> None:
     from interphase.surface.normals import theta_a_filters
     from interphase.surface.profiles import from_spec
 
-    t = theta_a_filters(from_spec(case.profile, case.d50, case.box_length), case.d50, (92, 90))
+    # a saw-tooth is periodic: the trace of n periods is n copies of one period's, so θa, Rn, Rnc
+    # and the slope of one period are those of the box's profile, at 1/n of the cost
+    length = case.d50 if case.profile.kind == "sawtooth" else case.box_length
+    t = theta_a_filters(from_spec(case.profile, case.d50, length), case.d50, (92, 90))
     t92, t90 = t[92], t[90]
     row.update(theta_a_deg_92=t92.theta_a_deg, theta_a_deg_90=t90.theta_a_deg, rn=t92.rn, rnc=t92.rnc,
                mean_slope_deg=t92.mean_slope_deg)

@@ -9,6 +9,7 @@ identifier matching ^[A-Za-z0-9_.-]+$). Anything else — a string carrying a ne
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from pathlib import Path
@@ -45,7 +46,10 @@ def name(value) -> str:
     return value
 
 
+@functools.lru_cache(maxsize=None)
 def environment(folder: str | Path) -> jinja2.Environment:
+    """One environment per template folder, kept: Jinja then compiles each template once per process
+    (its loader still reloads a template whose file changed)."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(folder)),
         undefined=jinja2.StrictUndefined,
