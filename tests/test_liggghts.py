@@ -311,7 +311,7 @@ def test_render_is_data_and_deterministic(engine):
     a, b = engine.render(tiny()), engine.render(tiny())
     assert a == b
     assert set(a) >= {"in.deck", "grains.data", "surface.stl", "sides.stl", "platen.stl", "engine.json"}
-    assert "rolling_friction cdt" in a["in.deck"] and "setforce NULL 0.0 NULL" in a["in.deck"]
+    assert "rolling_friction epsd2" in a["in.deck"] and "setforce NULL 0.0 NULL" in a["in.deck"]
 
 
 def test_grains_leaving_under_a_side_wall_are_removed_not_lost(run):
@@ -339,3 +339,21 @@ def test_grain_balance_names_a_leak(tmp_path):
     assert check_grain_balance(tmp_path) is None
     (tmp_path / "balance.txt").write_text(head + "0 200 0\n100 199 0\n200 197 1\n")
     assert "1 grain(s) left the domain by step 100" in check_grain_balance(tmp_path)
+
+
+def test_recipe_code_is_part_of_the_case_identity(tmp_path):
+    """A physics change made in Python (not in a template) must change every case id; a comment or
+    docstring edit must not."""
+    from interphase.engines.base import code_digest
+
+    src = tmp_path / "recipe.py"
+    src.write_text('"""doc"""\nMODEL = "cdt"  # rolling\n')
+    a = code_digest(src)
+    src.write_text('"""other words"""\n# a comment\nMODEL = "cdt"\n')
+    assert code_digest(src) == a
+    src.write_text('"""doc"""\nMODEL = "epsd2"\n')
+    assert code_digest(src) != a
+
+    class Variant(Liggghts):       # same templates, recipe in another module (this file)
+        pass
+    assert Variant().template_hash() != Liggghts().template_hash()

@@ -136,7 +136,7 @@ def test_bad_lab_file_names_the_column(tmp_path):
 def test_cli_report_without_results_exit_2(tmp_path, capsys):
     toml = tmp_path / "c.toml"
     text = (ROOT / "campaigns" / "quick.toml").read_text().replace('name = "quick"', 'name = "nothing_here"')
-    toml.write_text(text + f'\n')
+    toml.write_text(text + '\n')
     code = main(["report", str(toml), "--out", str(tmp_path / "r")])
     err = capsys.readouterr().err
     assert code == 2 and "campaign run" in err and "Traceback" not in err

@@ -155,8 +155,8 @@ def test_tables_follow_the_contract(yrun):
 
 
 class TestYadeReader(ReaderContract):
-    @pytest.fixture(scope="class")
-    def finished(self, yrun):
+    @pytest.fixture
+    def finished(self, yrun):           # `yrun` caches per session: the case runs once
         return yrun(tiny(friction_ps=0.2))
 
 

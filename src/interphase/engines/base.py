@@ -11,7 +11,10 @@ results, plus a profile that knows how this machine launches the binary.
 from __future__ import annotations
 
 import abc
+import ast
+import functools
 import hashlib
+import inspect
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -84,12 +87,20 @@ class Engine(abc.ABC):
         """Engine version string (part of every case id)."""
 
     def template_hash(self) -> str:
-        """SHA-256 (short) over every template file of this engine, names included."""
+        """SHA-256 (short) of the recipe: every template file of this engine (names included) and the
+        code of the Python modules that compute the templates' values (the engine's module and
+        engines/device.py, render.py), so that a change of physics made in Python (a rolling
+        model, a wall height) changes every case id as a template edit does. Code is hashed as its
+        syntax tree without docstrings: comments, layout and docstrings do not count."""
         h = hashlib.sha256()
         for p in sorted(self.templates.rglob("*")):
             if p.is_file():
                 h.update(p.relative_to(self.templates).as_posix().encode())
                 h.update(p.read_bytes())
+        here = Path(__file__).parent
+        for src in (Path(inspect.getsourcefile(type(self))), here / "device.py", here / "render.py"):
+            h.update(src.name.encode())
+            h.update(code_digest(src).encode())
         return h.hexdigest()[:16]
 
     # -- the contract
@@ -193,3 +204,21 @@ def steps_for(duration: float, dt: float, multiple: int = 1) -> int:
 
     n = max(1, int(math.ceil(duration / dt)))
     return -(-n // multiple) * multiple
+
+
+@functools.lru_cache(maxsize=None)
+def _code_digest(text: str) -> str:
+    tree = ast.parse(text)
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if (isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body
+                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
+                and isinstance(body[0].value.value, str)):
+            node.body = body[1:] or [ast.Pass()]
+    return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
+
+
+def code_digest(path: str | os.PathLike) -> str:
+    """SHA-256 of a Python file's syntax tree without docstrings (comments and layout never reach
+    the tree): what the code does, not how it is written or explained."""
+    return _code_digest(Path(path).read_text())

@@ -14,7 +14,7 @@ point, and the reader merges those into one contact (io/yade.py).
 
 Time step: dt = 0.2 × Rayleigh time of the smallest grain, as LIGGGHTS. Contact law:
 Hertz–Mindlin (Law2_ScGeom_MindlinPhys_Mindlin) with rolling resistance; the parameter mapping to
-LIGGGHTS (restitution → betan/betas, cdt rolling coefficient → eta, krot) is in docs/engine_mapping.md
+LIGGGHTS (restitution → betan/betas, epsd2 rolling coefficient → eta, krot) is in docs/engine_mapping.md
 and `contact_parameters` below.
 """
 
@@ -70,13 +70,14 @@ def contact_parameters(case: Case) -> dict:
       So betan = betas = √(5/6)·|β(e)| gives the same dashpot (YADE's `en` would use Thornton's fit,
       a different law). YADE drops the shear dashpot at sliding contacts; LIGGGHTS applies none there
       either (it only dumps it).
-    - Rolling: LIGGGHTS cdt torque = μr·R_eff·Fn (R_eff = r1r2/(r1+r2) between grains); YADE's
-      elastic–plastic moment is capped at eta·R_mean·Fn (R_mean = (r1+r2)/2). eta = μr/2 matches the
-      grain–grain cap for equal grains (the bulk); wall contacts then get eta·R_mean = 0.75·μr·r
-      (R_mean = 1.5r with the facet's refR1 = 2r) where LIGGGHTS has μr·r.
-      krot [N·m/rad] (one constant, YADE's limitation) = ks(δ = 0.3 % D50)·(D50/2)², so the cap is
-      reached after a rotation of a few 1e−3 rad: close to cdt's constant torque. μr = 0 → krot = 0
-      (YADE applies no cap when eta = 0).
+    - Rolling: both engines use an elastic–plastic rolling spring. LIGGGHTS epsd2: kr = kt·R_eff²,
+      cap μr·R_eff·Fn (R_eff = r1r2/(r1+r2) between grains); YADE's moment is capped at
+      eta·R_mean·Fn (R_mean = (r1+r2)/2). eta = μr/2 matches the grain–grain cap for equal grains (the
+      bulk); wall contacts then get eta·R_mean = 0.75·μr·r (R_mean = 1.5r with the facet's
+      refR1 = 2r) where LIGGGHTS has μr·r. krot [N·m/rad] (one constant, YADE's limitation) =
+      ks(δ = 0.3 % D50)·(D50/4)²: epsd2's kt·R_eff² for two D50 grains (R_eff = D50/4) at a typical
+      overlap ((D50/2)², four times stiffer, left YADE 10–25 % stronger than LIGGGHTS on the box and
+      the spaced saw-tooth; docs/crosscheck.md). μr = 0 → krot = 0 (YADE applies no cap when eta = 0).
     """
     e = case.restitution
     beta = 0.0 if e >= 1 else abs(math.log(e)) / math.sqrt(math.log(e) ** 2 + math.pi ** 2)
@@ -91,7 +92,7 @@ def contact_parameters(case: Case) -> dict:
                 # YADE caps the rolling moment only when eta·R·Fn > 0 (Law2_ScGeom_MindlinPhys_Mindlin:
                 # `if (MomentMax > 0)`): eta = 0 with krot > 0 is an UNLIMITED rolling spring, and
                 # grains on a flat could not roll at all (μs = 0.5 gave exactly 0.500, measured)
-                krot=ks * r50 ** 2 if case.rolling_friction > 0 else 0.0)
+                krot=ks * (r50 / 2) ** 2 if case.rolling_friction > 0 else 0.0)
 
 
 def _inplane(segments, width: float) -> list[list[float]]:
