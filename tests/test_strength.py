@@ -152,3 +152,20 @@ def test_missing_columns_named():
         st.surface_stress_ratio(pd.DataFrame({"window_fx": [1.0]}))
     with pytest.raises(MissingColumnError, match="vx"):
         st.velocity_profile(pd.DataFrame({"snapshot": [0], "z": [0.0], "radius": [1.0]}))
+
+
+def test_peak_snapshot_on_a_plateau_is_a_sheared_state():
+    """Flat sliding: the ratio rises to 0.2 within 0.05 mm and stays; noise puts the maximum at
+    0.1 mm, nearest to the start-of-shear snapshot. The peak state must be a sheared snapshot."""
+    s = np.linspace(0, 2e-3, 401)
+    r = np.minimum(s / 5e-5, 1.0) * 0.2
+    r[20] += 1e-3                                  # the maximum at 0.1 mm
+    peak = st.find_peak(s, r, 0.0)
+    assert peak.shear_disp == pytest.approx(1e-4)
+    snaps = np.array([1.5e-5, 5e-4, 1e-3, 1.5e-3, 2e-3])
+    assert st.peak_snapshot(snaps, s, r, peak) == 1
+    # a sharp peak: the nearest snapshot even if the ratio there has dropped (no snapshot near it)
+    r2 = 0.2 + 0.3 * np.exp(-((s - 7e-4) / 3e-5) ** 2)
+    p2 = st.find_peak(s, r2, 0.0)
+    assert st.peak_snapshot(snaps, s, r2, p2) == 1
+    assert st.peak_snapshot(snaps, s, np.full_like(s, np.nan), st.find_peak(s, np.full_like(s, np.nan), 0.0)) is None

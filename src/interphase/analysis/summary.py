@@ -16,7 +16,8 @@ and returns Summary(row, series). Others read these row keys (values JSON-able; 
 Choices (where METHODS.md is silent):
 - Peak: the maximum of a centred moving average of the History stress ratio over PEAK_WINDOW_D50 ·
   D50 of shear displacement (strength.py); the state quantities come from the contact snapshot
-  nearest the peak (`peak_snapshot`).
+  nearest the peak among those whose smoothed ratio is within 5 % of the peak (`peak_snapshot`,
+  strength.peak_snapshot): on a sliding plateau the plain nearest one can be the start of shear.
 - Measuring window (Case.window): interface tests measure over the grains whose centres lie 3 D50 or
   more from either side wall — History's window_fx/fz for μs, the 'ps' contacts of those grains for
   the surface anisotropy, and the sampling region's x range. A departure from METHODS.md (which
@@ -164,10 +165,9 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
 
     # -- the peak snapshot
     snaps = contacts.groupby("snapshot")["shear_disp"].first().sort_index() if len(contacts) else pd.Series(dtype=float)
-    peak_snap = None
-    if len(snaps) and math.isfinite(peak.shear_disp):
-        peak_snap = snaps.index[int(np.argmin(np.abs(snaps.to_numpy() - peak.shear_disp)))]
-    elif len(snaps):
+    k = st.peak_snapshot(snaps.to_numpy(), hist["shear_disp"], used, peak)
+    peak_snap = snaps.index[k] if k is not None else None
+    if peak_snap is None and len(snaps):
         reasons["peak_snapshot"] = "no peak in the History"
     else:
         reasons["peak_snapshot"] = "no contact snapshot"
