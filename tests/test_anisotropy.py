@@ -200,6 +200,9 @@ def test_rotation_rotates_every_direction(seed, n, beta):
     t1, r1 = all_directions(theta + beta, fn, ft)
     b = math.degrees(beta)
     for key in ("theta_fabric_deg", "theta_n_deg", "theta_t_deg"):
+        if math.isnan(t0[key]):   # a few contacts with a strong fabric: the correction g ≤ 0 somewhere
+            assert math.isnan(t1[key]) and t1["reason"] == t0["reason"] != "", key
+            continue
         assert _ang_close(t1[key], t0[key] + b, tol=1e-6), key
     assert _ang_close(r1["theta_r_deg"], r0["theta_r_deg"] + b, tol=1e-6)
     assert _ang_close(r1["force_angle_deg"], r0["force_angle_deg"] + b, period=360.0, tol=1e-6)
