@@ -357,3 +357,12 @@ def test_recipe_code_is_part_of_the_case_identity(tmp_path):
     class Variant(Liggghts):       # same templates, recipe in another module (this file)
         pass
     assert Variant().template_hash() != Liggghts().template_hash()
+
+
+def test_dumps_without_blocks_read_as_empty_tables(engine, run, tmp_path):
+    folder, _ = _copy_finished(run, tmp_path)
+    for name in ("contacts_pair.dump", "contacts_wall.dump", "particles.dump"):
+        (folder / name).write_text("")
+    res = engine.read_results(folder)
+    assert res.contacts.empty and list(res.contacts.columns) == list(CONTACT_COLUMNS)
+    assert res.particles.empty and list(res.particles.columns) == list(PARTICLE_COLUMNS)

@@ -163,3 +163,9 @@ def test_missing_column_refused(real):
         summarise(case, Results(res.contacts.drop(columns="overlap"), res.history))
     with pytest.raises(MissingColumnError, match="platen_z"):
         summarise(case, Results(res.contacts, res.history.drop(columns="platen_z")))
+
+
+def test_peak_snapshot_has_no_reason_when_found(real):
+    _, _, summary = real
+    assert math.isfinite(summary.row["peak_snapshot"])
+    assert "peak_snapshot" not in summary.row["reasons"]

@@ -167,10 +167,8 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     snaps = contacts.groupby("snapshot")["shear_disp"].first().sort_index() if len(contacts) else pd.Series(dtype=float)
     k = st.peak_snapshot(snaps.to_numpy(), hist["shear_disp"], used, peak)
     peak_snap = snaps.index[k] if k is not None else None
-    if peak_snap is None and len(snaps):
-        reasons["peak_snapshot"] = "no peak in the History"
-    else:
-        reasons["peak_snapshot"] = "no contact snapshot"
+    if peak_snap is None:
+        reasons["peak_snapshot"] = "no peak in the History" if len(snaps) else "no contact snapshot"
     row["peak_snapshot"] = int(peak_snap) if peak_snap is not None else math.nan
     row["peak_snapshot_shear_disp"] = float(snaps[peak_snap]) if peak_snap is not None else math.nan
     keys = snaps.index.to_numpy()

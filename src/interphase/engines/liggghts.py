@@ -15,8 +15,9 @@ smallest grain (Rayleigh). Rolling friction: the `epsd2` model (elastic–plasti
 increment kr·Δθ with kr = kt·R_eff², capped at μr·R_eff·Fn, no dashpot) with coefficient
 case.rolling_friction at every contact. Not `cdt` (a constant torque opposing the rolling velocity,
 with no static resistance): with cdt LIGGGHTS was 20–50 % weaker than YADE's elastic–plastic law
-wherever grains roll (flat μs 0.5, spaced saw-tooth, box); with epsd2 the two agree within ~5 %
-(docs/crosscheck.md). The study's PFC2D rolling resistance is also a spring with a cap. Damping: LIGGGHTS's Hertz damping from the coefficient of restitution case.restitution.
+wherever grains roll (flat μs 0.5, spaced saw-tooth, box); with epsd2 those agree within ~5 % at
+1000 grains (docs/crosscheck.md). Damping: LIGGGHTS's Hertz damping from the coefficient of
+restitution case.restitution.
 """
 
 from __future__ import annotations

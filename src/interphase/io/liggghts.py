@@ -2,11 +2,11 @@
 
 Dumps are split into ITEM blocks with one regular-expression pass over the file; the rows of all
 blocks are parsed in one bulk pass and their columns looked up by the header names
-(`ITEM: ENTRIES c_pc[1] …`, `ITEM: ATOMS id x z …`). Column meaning of compute pair/gran/local and wall/gran/local (fixed
-order in LIGGGHTS 3.8.0, ENGINES.md): pairs 1-3 centre i, 4-6 centre j, 7-9 id i, id j, periodic
-flag, 10-12 force on i, 13-18 normal/tangential parts, 19 area, 20 overlap, 21-23 contact point;
-walls 1-3 contact point, 4-6 particle centre, 7-9 mesh index, triangle id, particle id, 10-12 force
-on the particle, 19-20 area/overlap.
+(`ITEM: ENTRIES c_pc[1] …`, `ITEM: ATOMS id x z …`). Column meaning of compute pair/gran/local and
+wall/gran/local (fixed order in LIGGGHTS 3.8.0, ENGINES.md): pairs 1-3 centre i, 4-6 centre j,
+7-9 id i, id j, periodic flag, 10-12 force on i, 13-18 normal/tangential parts, 19 area, 20 overlap,
+21-23 contact point; walls 1-3 contact point, 4-6 particle centre, 7-9 mesh index, triangle id,
+particle id, 10-12 force on the particle, 19-20 area/overlap.
 
 Frame: the decks move the surface (lower box) in −x, so the engine frame is the analysis frame
 (shear_sign = +1, engine.json). Mesh index 0 in wall/gran is the rough surface ('ps'); others 'pw'.
@@ -147,8 +147,11 @@ def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -
 def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
     meta = meta or _meta(folder)
-    parts = [_contacts_from_dump(read_dump(folder / "contacts_pair.dump"), "c_pc", False, meta),
-             _contacts_from_dump(read_dump(folder / "contacts_wall.dump"), "c_wc", True, meta)]
+    dumps = [(read_dump(folder / "contacts_pair.dump"), "c_pc", False),
+             (read_dump(folder / "contacts_wall.dump"), "c_wc", True)]
+    parts = [_contacts_from_dump(df, prefix, wall, meta) for df, prefix, wall in dumps if len(df)]
+    if not parts:
+        return pd.DataFrame({c: pd.Series(dtype=float) for c in CONTACT_COLUMNS})
     cols = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
     steps = np.unique(cols["snapshot"])
     cols["snapshot"] = np.searchsorted(steps, cols["snapshot"]).astype(np.int64)   # 0, 1, 2 … in time order
@@ -179,6 +182,8 @@ def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame
     folder = Path(folder)
     meta = meta or _meta(folder)
     df = read_dump(folder / "particles.dump")
+    if not len(df):
+        return pd.DataFrame({c: pd.Series(dtype=float) for c in PARTICLE_COLUMNS})
     steps = df["timestep"].to_numpy()
     t = (steps - _shear_start(meta)) * meta["dt"]
     return pd.DataFrame({"snapshot": np.unique(steps, return_inverse=True)[1].astype(np.int64), "time": t,
