@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from interphase.campaign.crosscheck import compare, crosscheck, seed_means, split_crosscheck
+from interphase.campaign.crosscheck import METRICS, compare, crosscheck, seed_means, split_crosscheck
 from interphase.cli import main
 from interphase.errors import InputError
 from tests.conftest import need_binary
@@ -112,7 +112,7 @@ def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
     report = crosscheck(path, output=out)
     t = report.table.set_index("metric")
     assert not report.missing
-    assert len(report.table) == 5 and (report.table.case == "interface-flat-mu0.2-mono-s1").all()
+    assert len(report.table) == len(METRICS) and (report.table.case == "interface-flat-mu0.2-mono-s1").all()
     lig, yad = t.loc["peak_stress_ratio", "liggghts"], t.loc["peak_stress_ratio", "yade"]
     assert lig == pytest.approx(0.2, abs=0.05) and yad == pytest.approx(0.2, abs=0.05)
     assert t.loc["peak_stress_ratio", "passed"] == True                 # noqa: E712

@@ -169,3 +169,11 @@ def test_peak_snapshot_has_no_reason_when_found(real):
     _, _, summary = real
     assert math.isfinite(summary.row["peak_snapshot"])
     assert "peak_snapshot" not in summary.row["reasons"]
+
+
+def test_mean_theta_r_over_loaded_snapshots(real):
+    _, _, summary = real
+    s = summary.series
+    loaded = s.loc[s["load_balanced"] & s["theta_r_surface_deg"].notna(), "theta_r_surface_deg"]
+    assert summary.row["theta_r_surface_mean_deg"] == pytest.approx(loaded.mean(), rel=1e-12)
+    assert min(loaded) < summary.row["theta_r_surface_mean_deg"] < max(loaded)

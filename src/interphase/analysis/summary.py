@@ -5,7 +5,8 @@ and returns Summary(row, series). Others read these row keys (values JSON-able; 
 
   test, peak_stress_ratio (tan δ interface / tan φ box), peak_stress_ratio_raw, shear_disp_at_peak [m],
   residual_stress_ratio, dilation_at_peak [m], peak_snapshot, peak_snapshot_shear_disp [m],
-  theta_r_surface_deg, theta_n_surface_deg (ψ, deg from vertical, + toward −x), a_r_surface,
+  theta_r_surface_deg, theta_n_surface_deg (ψ, deg from vertical, + toward −x), theta_r_surface_mean_deg
+  (θr averaged over the snapshots where the surface carries its load), a_r_surface,
   a_n_surface, surface_force_angle_deg, stress_ratio_surface_contacts, n_contacts_surface,
   theta_r_region_deg, theta_n_region_deg, theta_t_region_deg, theta_fabric_region_deg, a_region,
   an_region, at_region, f0_region [N], stress_ratio_region (−σxz/σzz), qp_region, qp_sff,
@@ -55,7 +56,8 @@ from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 
 ROW_KEYS = (
     "test", "peak_stress_ratio", "shear_disp_at_peak", "residual_stress_ratio", "dilation_at_peak",
-    "peak_snapshot", "theta_r_surface_deg", "theta_n_surface_deg", "a_r_surface", "a_n_surface",
+    "peak_snapshot", "theta_r_surface_deg", "theta_r_surface_mean_deg", "theta_n_surface_deg", "a_r_surface",
+    "a_n_surface",
     "surface_force_angle_deg", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
     "at_region", "stress_ratio_region", "qp_region", "qp_sff", "principal_stress_deg_region",
     "shear_band_d50", "inertial_number", "theta_a_deg_92", "theta_a_deg_90", "rn", "rnc",
@@ -275,18 +277,35 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     for k, v in checks(case, results).items():
         row.setdefault(k, v)
 
+    series = _series(hist, ratio, window, surf, stress, region, snaps)
+    if len(hist):
+        series["load_balanced"] = balanced
+        series["stress_ratio_smooth"] = st.moving_average(series["shear_disp"].to_numpy(float),
+                                                          used.to_numpy(float), window)
+    row["theta_r_surface_mean_deg"] = _mean_over_loaded(series, "theta_r_surface_deg", reasons)
+
     # anything NaN without a reason gets one, so that no NaN goes unexplained
     for k, v in list(row.items()):
         if isinstance(v, float) and not math.isfinite(v) and k not in reasons:
             reasons[k] = "undefined (see the other reasons)"
     row = {k: _scalar(v) for k, v in row.items()}
     row["reasons"] = reasons
-    series = _series(hist, ratio, window, surf, stress, region, snaps)
-    if len(hist):
-        series["load_balanced"] = balanced
-        series["stress_ratio_smooth"] = st.moving_average(series["shear_disp"].to_numpy(float),
-                                                          used.to_numpy(float), window)
     return Summary(row=row, series=series)
+
+
+def _mean_over_loaded(series: pd.DataFrame, key: str, reasons: dict) -> float:
+    """Mean of a snapshot quantity over the snapshots whose History row is load-balanced (the
+    surface carries its share of the platen's load): steadier than the one peak snapshot, which a
+    stick–slip event sets (docs/liggghts.md: θr over the shear vs δ)."""
+    name = key.replace("_deg", "_mean_deg")
+    if key not in series or "load_balanced" not in series:
+        reasons[name] = "no snapshot series (box test or no contacts)"
+        return math.nan
+    v = series.loc[series["load_balanced"].astype(bool) & series[key].notna(), key]
+    if v.empty:
+        reasons[name] = "no snapshot where the surface carries its share of the platen's load"
+        return math.nan
+    return float(v.mean())
 
 
 def _in_window(contacts: pd.DataFrame, x0: float, x1: float) -> pd.DataFrame:

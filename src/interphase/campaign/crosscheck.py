@@ -13,8 +13,9 @@ so every other line keeps its number in error messages):
     angle_deg = 3.0            # θr, θn at the surface (ψ, degrees from vertical): |Δ|
 
 Metrics (from each case's summary.json, interphase.analysis.summary row keys): peak_stress_ratio,
-shear_disp_at_peak [m], theta_r_surface_deg, theta_n_surface_deg [deg, ψ], dilation_at_peak [m].
-Only the first three with a tolerance pass or fail; the others are reported with their differences.
+shear_disp_at_peak [m], theta_r_surface_deg (at the peak snapshot), theta_r_surface_mean_deg (over the
+loaded snapshots), theta_n_surface_deg [deg, ψ], dilation_at_peak [m]. Those with a tolerance pass
+or fail; the others are reported with their differences.
 Runs go through interphase.campaign.run.run_campaign, so finished cases (DONE) are reused.
 """
 
@@ -39,6 +40,7 @@ METRICS = (
     ("peak_stress_ratio", "-", "rel", "stress_ratio_rel"),
     ("shear_disp_at_peak", "m", None, None),
     ("theta_r_surface_deg", "deg", "abs", "angle_deg"),
+    ("theta_r_surface_mean_deg", "deg", "abs", "angle_deg"),
     ("theta_n_surface_deg", "deg", "abs", "angle_deg"),
     ("dilation_at_peak", "m", None, None),
 )
