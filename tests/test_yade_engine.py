@@ -253,3 +253,15 @@ def test_classify_and_profile(monkeypatch):
 
 def test_version_from_the_binary(yade_engine):
     assert yade_engine.version().startswith("YADE 20")
+
+
+def test_facet_contacts_carry_the_liggghts_wall_rolling_law(yrun):
+    """Grain–facet contacts get epsd2's wall rolling stiffness kt(R* = r)·r² and cap μr·r·Fn, set
+    per interaction by the driver (the Ip2 functor's single krot/eta fit grain pairs): at the end of a
+    real run every facet contact older than the 10-step update period holds them."""
+    folder, _ = yrun(tiny(profile=SAW, friction_ps=0.5))
+    rolling = json.loads((folder / "rolling.json").read_text())
+    p = contact_parameters(tiny(profile=SAW, friction_ps=0.5))
+    assert rolling["kr_wall"] == pytest.approx(p["krot_wall"]) and p["krot_wall"] > 4 * p["krot"]
+    assert rolling["facet_contacts"] > 10
+    assert rolling["matched"] >= 0.9 * rolling["facet_contacts"]

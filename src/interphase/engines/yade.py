@@ -72,12 +72,14 @@ def contact_parameters(case: Case) -> dict:
       either (it only dumps it).
     - Rolling: both engines use an elastic–plastic rolling spring. LIGGGHTS epsd2: kr = kt·R_eff²,
       cap μr·R_eff·Fn (R_eff = r1r2/(r1+r2) between grains); YADE's moment is capped at
-      eta·R_mean·Fn (R_mean = (r1+r2)/2). eta = μr/2 matches the grain–grain cap for equal grains (the
-      bulk); wall contacts then get eta·R_mean = 0.75·μr·r (R_mean = 1.5r with the facet's
-      refR1 = 2r) where LIGGGHTS has μr·r. krot [N·m/rad] (one constant, YADE's limitation) =
+      eta·R_mean·Fn (R_mean = (r1+r2)/2). eta = μr/2 matches the grain–grain cap for equal grains.
+      krot [N·m/rad] (one constant per functor, YADE's limitation) =
       ks(δ = 0.3 % D50)·(D50/4)²: epsd2's kt·R_eff² for two D50 grains (R_eff = D50/4) at a typical
       overlap ((D50/2)², four times stiffer, left YADE 10–25 % stronger than LIGGGHTS on the box and
       the spaced saw-tooth; docs/crosscheck.md). μr = 0 → krot = 0 (YADE applies no cap when eta = 0).
+      Grain–facet contacts (where the functor's eta·R_mean would be 0.75·μr·r, R_mean = 1.5r with
+      the facet's refR1 = 2r) get epsd2's wall values instead, set per interaction by the driver every
+      10 steps: krot_wall = ks(R* = r)·r², cap μr·r·Fn. Measured effect in docs/crosscheck.md.
     """
     e = case.restitution
     beta = 0.0 if e >= 1 else abs(math.log(e)) / math.sqrt(math.log(e) ** 2 + math.pi ** 2)
@@ -92,7 +94,12 @@ def contact_parameters(case: Case) -> dict:
                 # YADE caps the rolling moment only when eta·R·Fn > 0 (Law2_ScGeom_MindlinPhys_Mindlin:
                 # `if (MomentMax > 0)`): eta = 0 with krot > 0 is an UNLIMITED rolling spring, and
                 # grains on a flat could not roll at all (μs = 0.5 gave exactly 0.500, measured)
-                krot=ks * (r50 / 2) ** 2 if case.rolling_friction > 0 else 0.0)
+                krot=ks * (r50 / 2) ** 2 if case.rolling_friction > 0 else 0.0,
+                # grain–facet contacts, set per interaction by the driver: epsd2's kr = kt·r² with
+                # R* = r, and its cap μr·r·Fn (the functor's one krot/eta fit grain pairs)
+                krot_wall=8 * g_eff * math.sqrt(r50 * TYPICAL_OVERLAP * case.d50) * r50 ** 2
+                if case.rolling_friction > 0 else 0.0,
+                mu_r=case.rolling_friction)
 
 
 def _inplane(segments, width: float) -> list[list[float]]:
