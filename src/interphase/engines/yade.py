@@ -86,7 +86,9 @@ def contact_parameters(case: Case) -> dict:
     b = math.sqrt(5.0 / 6.0) * beta
     r50 = case.d50 / 2
     g_eff = case.shear_modulus / (2 * (2 - case.poisson))        # YADE/LIGGGHTS G* of two equal materials
-    ks = 8 * g_eff * math.sqrt((r50 / 2) * TYPICAL_OVERLAP * case.d50)
+
+    def ks(r_star: float) -> float:        # Mindlin tangential stiffness at the typical overlap [N/m]
+        return 8 * g_eff * math.sqrt(r_star * TYPICAL_OVERLAP * case.d50)
     E = youngs_modulus(case.shear_modulus, case.poisson)
     return dict(E=E, E_wall=E * FACET_STIFFENING, nu=case.poisson, density=case.density,
                 mu_pp=case.friction_pp, mu_ps=case.friction_ps if case.test == "interface" else case.friction_pw,
@@ -94,11 +96,10 @@ def contact_parameters(case: Case) -> dict:
                 # YADE caps the rolling moment only when eta·R·Fn > 0 (Law2_ScGeom_MindlinPhys_Mindlin:
                 # `if (MomentMax > 0)`): eta = 0 with krot > 0 is an UNLIMITED rolling spring, and
                 # grains on a flat could not roll at all (μs = 0.5 gave exactly 0.500, measured)
-                krot=ks * (r50 / 2) ** 2 if case.rolling_friction > 0 else 0.0,
+                krot=ks(r50 / 2) * (r50 / 2) ** 2 if case.rolling_friction > 0 else 0.0,
                 # grain–facet contacts, set per interaction by the driver: epsd2's kr = kt·r² with
                 # R* = r, and its cap μr·r·Fn (the functor's one krot/eta fit grain pairs)
-                krot_wall=8 * g_eff * math.sqrt(r50 * TYPICAL_OVERLAP * case.d50) * r50 ** 2
-                if case.rolling_friction > 0 else 0.0,
+                krot_wall=ks(r50) * r50 ** 2 if case.rolling_friction > 0 else 0.0,
                 mu_r=case.rolling_friction)
 
 
