@@ -298,6 +298,26 @@ def test_lost_grain_is_an_engine_error(engine, tmp_path):
     assert "ERROR" in err.value.log_tail
 
 
+def test_platen_that_never_settles_is_an_engine_error_and_shear_is_skipped(engine, tmp_path):
+    """The consolidation loop runs out without the platen force in its band (here: a band no force
+    can be in, and one chunk): the run is a `not_consolidated` failure naming the force, and the
+    shear never ran (it would shear the soil under another stress)."""
+    import re
+
+    engine.write_input(tiny(shear_distance=0.5e-3, snapshot_every=0.5e-3), tmp_path)
+    deck = (tmp_path / "in.deck").read_text()
+    deck, n_loop = re.subn(r"variable kc loop \d+", "variable kc loop 1", deck)
+    deck, n_band = re.subn(r'if "\$\{pfc\} > \S+ && \$\{pfc\} < \S+"', 'if "${pfc} > 1e9 && ${pfc} < -1e9"', deck)
+    assert n_loop == n_band == 1
+    (tmp_path / "in.deck").write_text(deck)
+    with pytest.raises(EngineError) as err:
+        engine.execute(tmp_path)
+    assert err.value.cause == "not_consolidated"
+    assert re.search(r"NOT CONSOLIDATED: platen force -?[0-9.e+-]+ N", str(err.value))
+    assert "NOT CONSOLIDATED" in err.value.log_tail
+    assert not (tmp_path / "contacts_pair.dump").exists() and not (tmp_path / "shear_start.txt").exists()
+
+
 def test_unreadable_stl_is_an_engine_error(engine, tmp_path):
     engine.write_input(tiny(), tmp_path)
     (tmp_path / "surface.stl").write_text("solid broken\nfacet normal 0 0 1\n outer loop\n  vertex 0 0\n")

@@ -24,7 +24,8 @@ import pandas as pd
 from interphase.case import Case
 
 #: classified causes of an engine failure
-CAUSES = ("lost_atoms", "bad_mesh", "timeout", "killed", "engine_error", "missing_output", "not_installed")
+CAUSES = ("lost_atoms", "not_consolidated", "bad_mesh", "timeout", "killed", "engine_error", "missing_output",
+          "not_installed")
 
 
 class EngineError(RuntimeError):

@@ -111,10 +111,13 @@ class Liggghts(Engine):
             sides = side_walls(prof, L, d_min, d_max, wall_top)
             files["sides.stl"] = stl_text(*segment_triangles(sides, y0, y1))
             z_lo = float(z.min()) - d_max
-            # the openings under the side walls: a grain whose centre crosses one has left the box
-            # and is deleted (fix massflow/mesh), before it can wedge outside (engines.device)
-            files["exit_left.stl"] = stl_text(*segment_triangles([[0.0, z_lo, 0.0, sides[0][3]]], y0, y1))
-            files["exit_right.stl"] = stl_text(*segment_triangles([[L, sides[1][1], L, z_lo]], y0, y1))
+            # the box's side planes, full height: a grain whose centre crosses one has left the box
+            # and is deleted (fix massflow/mesh) before it can wedge outside (engines.device). Full
+            # height, not only the openings under the walls: a large grain riding a valley can be
+            # squeezed past a wall's bottom edge with its centre above it (well-graded soil, 1 of
+            # 9 seeds lost it, shot up at 27 m/s, docs/liggghts.md)
+            files["exit_left.stl"] = stl_text(*segment_triangles([[0.0, z_lo, 0.0, wall_top]], y0, y1))
+            files["exit_right.stl"] = stl_text(*segment_triangles([[L, wall_top, L, z_lo]], y0, y1))
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max   # the surface travels −D
             moving, fixed = "surf", "sides"
             window = (*case.window, top + d_max)
@@ -227,6 +230,12 @@ class Liggghts(Engine):
         leak = check_grain_balance(folder)
         if leak:
             raise EngineError("lost_atoms", leak, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
+        unconsolidated = re.search(r"^NOT CONSOLIDATED: .*$", text, re.MULTILINE)
+        if unconsolidated:
+            # the deck skipped the shear: a platen that never settled on its target would shear
+            # the soil under another stress (one well-graded seed: a servo limit cycle, 1.4 × σ)
+            raise EngineError("not_consolidated", unconsolidated.group(0), command=cmd, returncode=rc,
+                              log_tail=log_tail(log), folder=folder)
         cause = classify(rc, text)
         if cause:
             first = next((ln for ln in text.splitlines() if "ERROR" in ln), f"return code {rc}")
