@@ -240,6 +240,31 @@ def test_permuting_rows_changes_nothing(seed, n):
         pd.testing.assert_frame_equal(a, b, rtol=1e-9, atol=1e-12)
 
 
+def test_lee_share_lowers_the_summed_angle_not_theta_r():
+    """A 45° saw-tooth valley: forces normal to the resisting face (ψn = 45°, 3 N in all) and to the
+    lee face (ψn = −45°, 1 N) and a flat contact (ψn = 0°, 0.5 N; neither side): the lee share is
+    1/4.5, θr stays on the resisting face (the lee force is orthogonal to it) while the summed angle
+    falls to atan2((3 − 1)·√½, (3 + 1)·√½ + 0.5)."""
+    psi_n = np.array([45.0, 45.0, -45.0, 0.0])
+    fn = np.array([1.0, 2.0, 1.0, 0.5])
+    c = contacts_table(-np.sin(R(psi_n)), np.cos(R(psi_n)), fn, np.zeros(4), kind="ps")
+    s = surface_anisotropy(c).iloc[0]
+    assert s["lee_share"] == pytest.approx(1.0 / 4.5, abs=1e-12)
+    alone = surface_anisotropy(c.iloc[[0, 1]]).iloc[0]
+    assert alone["lee_share"] == 0.0 and alone["theta_r_deg"] == pytest.approx(45.0, abs=1e-10)
+    # a lee force orthogonal to the resisting ones leaves R's principal axes in place
+    assert surface_anisotropy(c.iloc[[0, 1, 2]]).iloc[0]["theta_r_deg"] == pytest.approx(45.0, abs=1e-10)
+    h = math.sqrt(0.5)
+    expect = math.degrees(math.atan2(3 * h - 1 * h, 3 * h + 1 * h + 0.5))
+    assert s["force_angle_deg"] == pytest.approx(expect, abs=1e-10) and s["force_angle_deg"] < s["theta_r_deg"]
+    # the lee side is the +x-leaning side in the analysis frame: a run written mirrored agrees
+    back = surface_anisotropy(apply_shear_sign(c, -1), shear_sign=-1).iloc[0]
+    assert back["lee_share"] == pytest.approx(s["lee_share"], abs=1e-15)
+    # no usable force: NaN, like θr
+    zero = c.assign(fx=0.0, fz=0.0, fn=0.0)
+    assert math.isnan(surface_anisotropy(zero).iloc[0]["lee_share"])
+
+
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(3, 200))
 def test_mirror_with_shear_sign_gives_same_psi(seed, n):

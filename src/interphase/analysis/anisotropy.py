@@ -310,7 +310,8 @@ def surface_anisotropy(contacts: pd.DataFrame, snapshots=None, shear_sign: int =
     or `snapshots`; those without a surface contact give NaN with a reason). Columns: n_contacts,
     theta_r_deg / theta_r_ccw_deg / ar (resultant force), theta_n_deg / an (force-weighted normal
     tensor), fabric a with theta_fabric_deg, force_angle_deg (ψF of the summed force on the grains),
-    stress_ratio = ΣFx/Σ(−Fz) with F = −f the force on the surface, reason."""
+    lee_share (share of Σ|f| on lee-side contacts, `_lee_share`), stress_ratio = ΣFx/Σ(−Fz) with
+    F = −f the force on the surface, reason."""
     require_columns(contacts, ("snapshot", "kind", "nx", "nz", "fn", "ft", "fx", "fz"))
     keys = _snapshot_keys(contacts, snapshots)
     c = apply_shear_sign(contacts, shear_sign)
@@ -327,12 +328,35 @@ def surface_anisotropy(contacts: pd.DataFrame, snapshots=None, shear_sign: int =
         out[col] = nrm[col].to_numpy()
     out["a"] = fab["a"].to_numpy()
     out["theta_fabric_deg"] = fab["theta_fabric_deg"].to_numpy()
+    out["lee_share"] = _lee_share(c, snap, keys, res["theta_r"].isna().to_numpy())
     with np.errstate(invalid="ignore", divide="ignore"):
         # F on the surface = −f: ΣFx/Σ(−Fz) = −Σfx/Σfz
         out["stress_ratio"] = -out["sum_fx"] / out["sum_fz"]
     out["reason"] = _join(np.where(out["n_contacts"].to_numpy() == 0, "no particle–surface contacts", ""),
                           res["reason"].to_numpy(), nrm["reason"].to_numpy())
     return out
+
+
+#: a surface contact is on the lee side when its normal leans toward +x by more than the θa filter's 2°
+LEE_TILT = math.radians(2.0)
+
+
+def _lee_share(c: pd.DataFrame, snap, keys, undefined) -> np.ndarray:
+    """Per snapshot, the share of Σ|f| over 'ps' contacts carried by lee-side contacts: normal
+    tilted toward +x (ψn < −2°), i.e. on faces the soil moves away from. These forces are nearly
+    orthogonal to the resisting faces' ones, so they barely turn θr (R is axial and force-weighted)
+    but they cut ΣFx: the summed-force angle, hence δ, falls below θr as this share grows
+    (docs/liggghts.md). NaN where θr is undefined."""
+    nx, nz = c["nx"].to_numpy(float), c["nz"].to_numpy(float)
+    mag = np.hypot(c["fx"].to_numpy(float), c["fz"].to_numpy(float))
+    ok = np.isfinite(mag) & np.isfinite(nx) & np.isfinite(nz)
+    with np.errstate(invalid="ignore"):
+        lee = ok & (nx > math.sin(LEE_TILT) * np.hypot(nx, nz))
+    keys, inv = _grouping(mag.size, snap, keys)
+    total = _gsum(inv, keys.size, np.where(ok, mag, 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = _gsum(inv, keys.size, np.where(lee, mag, 0.0)) / total
+    return np.where(undefined, np.nan, share)
 
 
 def in_rectangle(x, z, rect) -> np.ndarray:

@@ -7,7 +7,8 @@ and returns Summary(row, series). Others read these row keys (values JSON-able; 
   residual_stress_ratio, dilation_at_peak [m], peak_snapshot, peak_snapshot_shear_disp [m],
   theta_r_surface_deg, theta_n_surface_deg (ψ, deg from vertical, + toward −x), theta_r_surface_mean_deg
   (θr averaged over the snapshots where the surface carries its load), a_r_surface,
-  a_n_surface, surface_force_angle_deg, stress_ratio_surface_contacts, n_contacts_surface,
+  a_n_surface, surface_force_angle_deg, lee_share_surface (share of the surface contact force on
+  faces leaning with the shear, which pulls δ below θr), stress_ratio_surface_contacts, n_contacts_surface,
   theta_r_region_deg, theta_n_region_deg, theta_t_region_deg, theta_fabric_region_deg, a_region,
   an_region, at_region, f0_region [N], stress_ratio_region (−σxz/σzz), qp_region, qp_sff,
   principal_stress_deg_region, n_contacts_region, region_x0/x1/z0/z1 [m], shear_band_d50,
@@ -58,7 +59,7 @@ ROW_KEYS = (
     "test", "peak_stress_ratio", "shear_disp_at_peak", "residual_stress_ratio", "dilation_at_peak",
     "peak_snapshot", "theta_r_surface_deg", "theta_r_surface_mean_deg", "theta_n_surface_deg", "a_r_surface",
     "a_n_surface",
-    "surface_force_angle_deg", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
+    "surface_force_angle_deg", "lee_share_surface", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
     "at_region", "stress_ratio_region", "qp_region", "qp_sff", "principal_stress_deg_region",
     "shear_band_d50", "inertial_number", "theta_a_deg_92", "theta_a_deg_90", "rn", "rnc",
     "mean_slope_deg", "n_contacts_surface", "reasons",
@@ -183,16 +184,17 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
                    theta_n_surface_deg=_first(surf, peak_snap, "theta_n_deg"),
                    a_r_surface=_first(surf, peak_snap, "ar"), a_n_surface=_first(surf, peak_snap, "an"),
                    surface_force_angle_deg=_first(surf, peak_snap, "force_angle_deg"),
+                   lee_share_surface=_first(surf, peak_snap, "lee_share"),
                    stress_ratio_surface_contacts=_first(surf, peak_snap, "stress_ratio"),
                    n_contacts_surface=int(_first(surf, peak_snap, "n_contacts")) if peak_snap is not None else 0)
         why = _first(surf, peak_snap, "reason") if peak_snap is not None else reasons.get("peak_snapshot", "")
         for k in ("theta_r_surface_deg", "theta_n_surface_deg", "a_r_surface", "a_n_surface",
-                  "surface_force_angle_deg", "stress_ratio_surface_contacts"):
+                  "surface_force_angle_deg", "lee_share_surface", "stress_ratio_surface_contacts"):
             if not math.isfinite(row[k]):
                 reasons[k] = why or "undefined at the peak snapshot"
     else:
         for k in ("theta_r_surface_deg", "theta_n_surface_deg", "a_r_surface", "a_n_surface",
-                  "surface_force_angle_deg", "stress_ratio_surface_contacts"):
+                  "surface_force_angle_deg", "lee_share_surface", "stress_ratio_surface_contacts"):
             row[k] = math.nan
             reasons[k] = "box test: no rough surface"
         row["n_contacts_surface"] = 0
@@ -382,6 +384,7 @@ def _series(hist, ratio, window, surf, stress, region, snaps) -> pd.DataFrame:
         snap["theta_n_surface_deg"] = surf["theta_n_deg"]
         snap["a_r_surface"] = surf["ar"]
         snap["surface_force_angle_deg"] = surf["force_angle_deg"]
+        snap["lee_share_surface"] = surf["lee_share"]
         snap["stress_ratio_surface_contacts"] = surf["stress_ratio"]
     if stress is not None:
         snap["stress_ratio_region"] = stress["stress_ratio"]

@@ -152,7 +152,8 @@ RESULT_COLUMNS = (
     ("theta_a_deg_92", "θa > 92° [°]"), ("theta_a_deg_90", "θa ≥ 90° [°]"), ("rnc", "Rnc(D50) [-]"),
     ("peak_stress_ratio", "tan δ peak [-]"), ("tan_phi", "tan φ box [-]"), ("efficiency", "E [-]"),
     ("theta_r_surface_deg", "θr surface [°]"), ("theta_n_surface_deg", "θn surface [°]"),
-    ("theta_r_region_deg", "θr region [°]"), ("stress_ratio_region", "q/p region [-]"),
+    ("lee_share_surface", "lee share [-]"),
+    ("theta_r_region_deg", "θr region [°]"), ("stress_ratio_region", "−σxz/σzz region [-]"),
     ("shear_disp_at_peak_mm", "u at peak [mm]"), ("shear_band_d50", "shear band [D50]"),
     ("inertial_number", "I [-]"),
 )
