@@ -1,6 +1,7 @@
-"""Analysis on real LIGGGHTS output (tests/data/liggghts_sawtooth45: 45° saw-tooth, 1600 grains,
-μs = 0.5; made by tests/data/make_liggghts_sawtooth45.py): the study's physical relations at the
-peak snapshot, measured in the window away from the side walls (Case.window)."""
+"""Analysis on real LIGGGHTS output (tests/data/liggghts_sawtooth45: 45° saw-tooth, well-graded
+grains, 1800 in a 60 × 30 D50 box, μs = 0.5; made by tests/data/make_liggghts_sawtooth45.py): the
+study's physical relations at the peak snapshot, measured in the window away from the side walls
+(Case.window)."""
 
 from __future__ import annotations
 
@@ -23,15 +24,24 @@ def row(summary):
     return summary.row
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "not reproduced on the current deck (epsd2 rolling, μr = 0.1): on this 45° saw-tooth the surface is "
-    "fully mobilised (tan δ ≈ tan φ of the box, φ ≈ 29°) while θr follows the faces (≈ θn ≈ 41–49°); "
-    "θr − δ at the peak snapshot is 15.6°, 17.9°, 12.9° for seeds 1–3; with μr = 0.5 (φ ≈ 40°) it is 0.5–6.5° (docs/liggghts.md). The earlier "
-    "fixture (cdt) met it at its peak snapshot by chance: its θr ranged 27–44° over the shear"))
 def test_theta_r_at_surface_near_interface_friction_angle(row):
-    """The study: θr at the surface ≈ the interface friction angle atan(peak stress ratio)."""
+    """The study: θr at the surface ≈ the interface friction angle atan(peak stress ratio), within 10°.
+    Measured (docs/liggghts.md) for its well-graded material in this device: 6.1–8.6° in 6 of 7
+    seeds, 12.0° in the seventh; uniform grains (mono) sit further off, 8.4–17.3°."""
     delta = math.degrees(math.atan(row["peak_stress_ratio"]))
-    assert abs(row["theta_r_surface_deg"] - delta) <= 10.0, (row["theta_r_surface_deg"], delta)
+    assert 0 < row["theta_r_surface_deg"] - delta <= 10.0, (row["theta_r_surface_deg"], delta)
+
+
+def test_lee_faces_carry_part_of_the_surface_force(summary):
+    """Why θr sits above δ: at every loaded snapshot part of the surface force is on lee faces
+    (normals leaning with the shear), which cuts ΣFx and so the summed-force angle (= atan of the
+    snapshot's stress ratio) below θr (0.16–0.30 of Σ|f| at the peak in the 11 runs of
+    docs/liggghts.md)."""
+    s = summary.series
+    s = s[s["load_balanced"] & s["lee_share_surface"].notna()]
+    assert len(s) >= 5
+    assert ((s["lee_share_surface"] > 0.05) & (s["lee_share_surface"] < 0.5)).all(), s["lee_share_surface"].tolist()
+    assert (s["theta_r_surface_deg"] > s["surface_force_angle_deg"]).all()
 
 
 def test_mean_theta_r_at_surface_near_interface_friction_angle(summary):
@@ -48,7 +58,8 @@ def test_stress_force_fabric_matches_average_stress(summary):
     """q/p from the anisotropy coefficients (stress–force–fabric) against the q/p of the average
     stress tensor in the sampling region, over the snapshots where the surface carries the platen's
     load: median difference within 10 %, none beyond 20 %. (The second-order relation is an
-    approximation: at the peak snapshot of this fixture it is 13.4 % off, 0.139 vs 0.123.)"""
+    approximation: on this fixture the median is 1.9 % and the worst snapshot 10.9 %; on the
+    earlier mono fixture the peak snapshot was 13.4 % off.)"""
     s = summary.series
     s = s[s["load_balanced"] & s["qp_sff"].notna() & s["qp_region"].notna()]
     assert len(s) >= 5
