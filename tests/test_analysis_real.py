@@ -56,10 +56,12 @@ def test_mean_theta_r_at_surface_near_interface_friction_angle(summary):
 
 def test_stress_force_fabric_matches_average_stress(summary):
     """q/p from the anisotropy coefficients (stress–force–fabric) against the q/p of the average
-    stress tensor in the sampling region, over the snapshots where the surface carries the platen's
-    load: median difference within 10 %, none beyond 20 %. (The second-order relation is an
-    approximation: on this fixture the median is 1.9 % and the worst snapshot 10.9 %; on the
-    earlier mono fixture the peak snapshot was 13.4 % off.)"""
+    stress tensor in the sampling region: within 10 % at the peak snapshot (here 0.094 vs 0.095);
+    over the snapshots where the surface carries the platen's load, median within 10 %, none beyond
+    20 %. (The second-order relation is an approximation: here the median is 1.9 % and the worst
+    snapshot 10.9 %; at the peaks of the 11 runs of docs/liggghts.md 0–6.3 %, one 14 %.)"""
+    r = summary.row
+    assert r["qp_sff"] == pytest.approx(r["qp_region"], rel=0.10), (r["qp_sff"], r["qp_region"])
     s = summary.series
     s = s[s["load_balanced"] & s["qp_sff"].notna() & s["qp_region"].notna()]
     assert len(s) >= 5
