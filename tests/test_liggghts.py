@@ -221,10 +221,20 @@ def test_side_walls_clear_grains_trapped_in_valleys():
     d50, dmin, dmax = 0.7e-3, 0.665e-3, 0.735e-3
     flat = from_spec(ProfileSpec.make("flat"), d50, 20 * d50)
     saw = from_spec(ProfileSpec.make("sawtooth", rt=1.0, sw=2.0, sr=0.0), d50, 20 * d50)
-    assert wall_gap(flat, dmin, dmax) == pytest.approx(0.05 * dmin)
+    assert wall_gap(flat, dmin, dmax, d50) == pytest.approx(0.05 * dmin)
     # largest grain in a 45° valley of depth D50: top at r/sin45 + r − Rt above the peaks
     r = dmax / 2
-    assert wall_gap(saw, dmin, dmax) == pytest.approx(r * np.sqrt(2) + r - d50 + 0.05 * dmin, rel=1e-2)
+    assert wall_gap(saw, dmin, dmax, d50) == pytest.approx(r * np.sqrt(2) + r - d50 + 0.05 * dmin, rel=1e-2)
+    # well-graded grains (0.35–1.05 mm): the largest sticks out 0.57 mm, more than d_min/2 but less
+    # than D50: the gap lets it pass (it jammed at the wall in most seeds when shut)
+    pmin, pmax = 0.35e-3, 1.05e-3
+    r = pmax / 2
+    assert wall_gap(saw, pmin, pmax, d50) == pytest.approx(r * np.sqrt(2) + r - d50 + 0.05 * pmin, rel=1e-2)
+    assert 0.5 * pmin < wall_gap(saw, pmin, pmax, d50) < d50
+    # a shallow saw-tooth (Rt = 0.2 D50): grains ride on the peaks; a gap for the largest would let
+    # median grains out, so the edge sits 0.05·d_min above the peaks
+    shallow = from_spec(ProfileSpec.make("sawtooth", rt=0.2, sw=2.0, sr=0.0), d50, 20 * d50)
+    assert wall_gap(shallow, pmin, pmax, d50) == pytest.approx(0.05 * pmin)
 
 
 def test_platen_holds_the_normal_stress_during_shear(run):

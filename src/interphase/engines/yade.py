@@ -148,7 +148,7 @@ class Yade(Engine):
             wall_top = pack.top + 3 * d_max
             pts, tri = inplane_triangles(type(prof)(x, z, prof.periodic, prof.name), width)
             moving = pts[tri].reshape(-1, 9).tolist()
-            fixed = _inplane(side_walls(prof, L, d_min, d_max, wall_top), width)   # LIGGGHTS' walls
+            fixed = _inplane(side_walls(prof, L, d_min, d_max, case.d50, wall_top), width)   # LIGGGHTS' walls
             window = [*case.window, top + d_max]
             z_lo = float(z.min()) - d_max
             x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max
