@@ -145,6 +145,18 @@ def test_box_test_summary():
     assert _finite(s.row["qp_region"])
 
 
+def test_peak_at_the_end_of_the_shear_is_flagged():
+    """A ratio still rising when the shear stops has no peak yet: the value stands as a lower bound,
+    with a note; a broad peak mid-shear is not flagged."""
+    case, res = synthetic_box()
+    assert summarise(case, res).row["peak_at_end"] is False
+    h = res.history.copy()
+    h["surface_fx"] = h["window_fx"] = 2.0 * (0.3 + 100 * h["shear_disp"])    # 0.3 → 0.6, rising
+    s = summarise(case, Results(res.contacts, h))
+    assert s.row["peak_at_end"] is True and "still be rising" in s.reasons["peak_at_end"]
+    assert s.row["peak_stress_ratio"] == pytest.approx(0.6, abs=0.02)
+
+
 def test_empty_tables_give_nan_with_reasons():
     case = Case(profile=ProfileSpec.make("flat"), d50=0.7e-3)
     res = Results(pd.DataFrame({c: [] for c in CONTACT_COLUMNS}), pd.DataFrame({c: [] for c in HISTORY_COLUMNS}),

@@ -4,6 +4,7 @@
 and returns Summary(row, series). Others read these row keys (values JSON-able; NaN written as null):
 
   test, peak_stress_ratio (tan δ interface / tan φ box), peak_stress_ratio_raw, shear_disp_at_peak [m],
+  peak_at_end (the maximum lies within one smoothing window of the end of the shear: a lower bound),
   residual_stress_ratio, dilation_at_peak [m], peak_snapshot, peak_snapshot_shear_disp [m],
   theta_r_surface_deg, theta_n_surface_deg (ψ, deg from vertical, + toward −x), theta_r_surface_mean_deg
   (θr averaged over the snapshots where the surface carries its load), a_r_surface,
@@ -56,7 +57,7 @@ from interphase.analysis.stress import average_stress, sampling_rectangle, trace
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, require_columns
 
 ROW_KEYS = (
-    "test", "peak_stress_ratio", "shear_disp_at_peak", "residual_stress_ratio", "dilation_at_peak",
+    "test", "peak_stress_ratio", "shear_disp_at_peak", "peak_at_end", "residual_stress_ratio", "dilation_at_peak",
     "peak_snapshot", "theta_r_surface_deg", "theta_r_surface_mean_deg", "theta_n_surface_deg", "a_r_surface",
     "a_n_surface",
     "surface_force_angle_deg", "lee_share_surface", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
@@ -165,6 +166,13 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
     if peak.reason:
         for k in ("peak_stress_ratio", "shear_disp_at_peak", "residual_stress_ratio", "dilation_at_peak"):
             reasons[k] = f"History: {peak.reason}"
+    # a maximum within one smoothing window of the last row may be a ratio still rising: a lower
+    # bound of the peak, not a peak (a note, the value stands)
+    end = float(hist["shear_disp"].max()) if len(hist) else math.nan
+    row["peak_at_end"] = bool(math.isfinite(peak.shear_disp) and peak.shear_disp >= end - window)
+    if row["peak_at_end"]:
+        reasons["peak_at_end"] = (f"the peak lies within one smoothing window ({window * 1e3:.3g} mm) of the end of "
+                                  f"the shear ({end * 1e3:.3g} mm): the ratio may still be rising; shear further")
 
     # -- the peak snapshot
     snaps = contacts.groupby("snapshot")["shear_disp"].first().sort_index() if len(contacts) else pd.Series(dtype=float)
