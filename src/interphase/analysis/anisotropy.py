@@ -343,10 +343,11 @@ LEE_TILT = math.radians(2.0)
 
 def _lee_share(c: pd.DataFrame, snap, keys, undefined) -> np.ndarray:
     """Per snapshot, the share of Σ|f| over 'ps' contacts carried by lee-side contacts: normal
-    tilted toward +x (ψn < −2°), i.e. on faces the soil moves away from. These forces are nearly
-    orthogonal to the resisting faces' ones, so they barely turn θr (R is axial and force-weighted)
-    but they cut ΣFx: the summed-force angle, hence δ, falls below θr as this share grows
-    (docs/liggghts.md). NaN where θr is undefined."""
+    tilted toward +x (ψn < −2°), i.e. on faces the soil moves away from. A lee force nearly
+    orthogonal to the resisting faces' ones turns the axes of R (axial, force-weighted) little but
+    cuts ΣFx: for two orthogonal families of forces the summed-force angle is θr − atan(s/(1 − s)),
+    s this share; friction tilts real forces off that ideal (docs/liggghts.md: θr vs δ). NaN where
+    θr is undefined."""
     nx, nz = c["nx"].to_numpy(float), c["nz"].to_numpy(float)
     mag = np.hypot(c["fx"].to_numpy(float), c["fz"].to_numpy(float))
     ok = np.isfinite(mag) & np.isfinite(nx) & np.isfinite(nz)

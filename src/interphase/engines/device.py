@@ -21,8 +21,8 @@ def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:
     shallow valleys, where grains ride on the peaks instead of in the valleys) the edge sits
     0.05·d_min above the peaks. The bound was d_min/2 until 2026-11-23: with well-graded grains
     (d_min = D50/2) it shut the 45° saw-tooth's 0.57 mm gap, and the largest grains jammed at the
-    left wall in most seeds (overlaps 0.3–0.63 D50, wall forces 7–20 N against a 2.9 N platen;
-    with the gap 0.09–0.27 D50 and 4–6 grains removed; docs/liggghts.md)."""
+    left wall in most seeds (max overlaps 0.31–0.63 D50, wall forces 7–20 N against a 2.9 N
+    platen; with the gap 0.09–0.28 D50 and 2–6 grains removed per run; docs/liggghts.md)."""
     from interphase.surface.trace import centroid_trace
 
     tr = centroid_trace(profile, d_max, dx=d_max / 1000)   # p to ~1e-3·d_max; the default step cost 0.15 s
