@@ -4,7 +4,8 @@ Run: .venv/bin/python tests/data/make_liggghts_sawtooth45.py [output folder]
 The case: 45° saw-tooth (Rt = D50, Sw = 2 D50), μs = 0.5, the study's well-graded material (poly,
 0.35–1.05 mm: its Figures 6.3 and 6.8 are for it), 1800 grains in a 60 × 30 D50 box (longer than tall,
 so that the side walls take less of the shear; the 20 D50 sampling region fits), G = 50 MPa (soft, so
-that it runs in a minute), 3 mm of shear, snapshots every 0.25 mm, packing seed 1.
+that it runs in a minute), 4 mm of shear (at 3 mm its peak fell on the last snapshot, a ratio still
+rising), snapshots every 0.25 mm, packing seed 1.
 Writes contacts/history/particles Parquet and case.json (the case and the engine parameters);
 the raw dumps are not kept (a few MB).
 """
@@ -23,7 +24,7 @@ from interphase.surface.spec import ProfileSpec
 
 CASE = Case(test="interface", profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), friction_ps=0.5,
             gradation=Gradation("poly"), shear_modulus=50e6, n_grains=1800, box_length_d50=60, box_height_d50=30,
-            shear_distance=3e-3, snapshot_every=0.25e-3, seed=1)
+            shear_distance=4e-3, snapshot_every=0.25e-3, seed=1)
 
 
 def main(out: Path) -> None:
