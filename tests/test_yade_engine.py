@@ -12,6 +12,7 @@ import pytest
 from interphase.case import Case
 from interphase.engines.base import EngineError, EngineProfile, get_engine
 from interphase.engines.yade import Yade, classify, contact_parameters
+from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 from tests.conftest import need_binary
@@ -224,6 +225,37 @@ def test_lost_grains_are_an_engine_error(yade_engine, tmp_path):
     with pytest.raises(EngineError) as err:
         yade_engine.execute(tmp_path)
     assert err.value.cause == "lost_atoms"
+
+
+def test_platen_that_never_settles_is_an_engine_error_and_shear_is_skipped(yade_engine, tmp_path):
+    """As in LIGGGHTS: consolidation out of chunks with the platen force outside its band (here a
+    band no force can be in, and one chunk) is a `not_consolidated` failure naming the force, and
+    the shear never ran."""
+    yade_engine.write_input(tiny(shear_distance=0.5e-3, snapshot_every=0.5e-3), tmp_path)
+    p = json.loads((tmp_path / "params.json").read_text())
+    p["platen_force_lo"], p["platen_force_hi"], p["steps"]["n_chunks_max"] = 1e9, -1e9, 1
+    (tmp_path / "params.json").write_text(json.dumps(p))
+    with pytest.raises(EngineError) as err:
+        yade_engine.execute(tmp_path)
+    assert err.value.cause == "not_consolidated"
+    assert str(err.value).startswith("[not_consolidated] NOT CONSOLIDATED: platen force ")
+    assert not (tmp_path / "shear_start.txt").exists()
+    assert len((tmp_path / "history.csv").read_text().splitlines()) <= 1    # no row (at most the header)
+
+
+def test_well_graded_soil_consolidates_before_shear(yrun):
+    """Well-graded grains settle far below the platen's start (lattice at d_max): the shear waits
+    for the platen to reach its target (it started at the first check before the loop, and the
+    platen never touched the soil: NaN strength); the clock starts where the shear did."""
+    case = tiny(profile=SAW, friction_ps=0.5, gradation=Gradation("poly"), n_grains=300)
+    folder, res = yrun(case)
+    p = json.loads((folder / "params.json").read_text())
+    start = int((folder / "shear_start.txt").read_text())
+    assert start > p["steps"]["n_consolidate"]
+    assert (start - p["steps"]["n_consolidate"]) % p["steps"]["n_chunk"] == 0
+    target = case.normal_stress * case.box_length * case.thickness
+    assert abs(res.history.normal_force.mean() - target) < 0.1 * target
+    assert res.history.shear_disp.iloc[0] == 0.0
 
 
 def test_timeout_is_classified(tmp_path):

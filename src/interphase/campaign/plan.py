@@ -128,7 +128,8 @@ def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
     """Rough engine run time [s]: particle-steps / throughput (ENGINES.md: 1.5–4e6 steps/s on one core),
     with the LIGGGHTS deck's own time step and consolidation time. Used for SLURM time limits; the
     engine's own timeout is separate."""
-    from interphase.engines.liggghts import CONSOLIDATION_TIME, time_step
+    from interphase.engines.device import CONSOLIDATION_TIME
+    from interphase.engines.liggghts import time_step
 
     steps = (CONSOLIDATION_TIME + case.shear_distance / case.shear_velocity) / time_step(case)
     return steps * estimate_grains(case) / throughput

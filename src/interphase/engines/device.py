@@ -7,6 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 
+# consolidation under the servo platen, the same protocol in both engines: a first stretch, then
+# chunks of a quarter of it until the platen force lies within the tolerance of its target
+CONSOLIDATION_TIME = 0.02   # [s] the first stretch
+CONSOLIDATION_CHUNKS = 40   # at most this many chunks, then the case fails as 'not_consolidated'
+PLATEN_TOLERANCE = 0.03     # consolidation ends when |F_platen − F_target| < this × F_target
+
 
 def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:
     """Height of the left side wall's bottom edge above the surface's highest point [m].

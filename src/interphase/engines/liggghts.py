@@ -35,7 +35,7 @@ import numpy as np
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
-from interphase.engines.device import side_walls
+from interphase.engines.device import CONSOLIDATION_CHUNKS, CONSOLIDATION_TIME, PLATEN_TOLERANCE, side_walls
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import rayleigh_time, youngs_modulus
@@ -43,9 +43,6 @@ from interphase.surface.mesh import extruded_triangles, segment_triangles, stl_t
 from interphase.surface.profiles import from_spec
 
 THROUGHPUT = 1.5e6     # particle-steps per second assumed for the timeout estimate (measured 2.5–4e6)
-CONSOLIDATION_TIME = 0.02   # [s] of platen servo consolidation before shear (the first stretch)
-CONSOLIDATION_CHUNKS = 40   # then at most this many chunks of a quarter of it until the platen force holds
-PLATEN_TOLERANCE = 0.03     # consolidation ends when |F_platen − F_target| < this × F_target
 HISTORY_POINTS = 400        # history rows over the shear
 SERVO_GAIN = 2.4            # in-band servo gain: see platen_servo (measured)
 SERVO_SATURATION = 0.9      # relative force error at which the platen reaches its top speed

@@ -33,7 +33,7 @@ from pathlib import Path
 from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
-from interphase.engines.device import side_walls
+from interphase.engines.device import CONSOLIDATION_CHUNKS, CONSOLIDATION_TIME, PLATEN_TOLERANCE, side_walls
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -41,7 +41,6 @@ from interphase.surface.mesh import inplane_triangles
 from interphase.surface.profiles import from_spec
 
 THROUGHPUT = 0.5e6          # particle-steps/s assumed for the timeout (measured ~1e6 with export)
-CONSOLIDATION_TIME = 0.02   # [s], as the LIGGGHTS deck
 HISTORY_POINTS = 400
 SERVO_BAND = 0.1            # relative force error at which the platen reaches servo_vmax
 TYPICAL_OVERLAP = 0.003     # δ/D50 used to size the rolling stiffness krot (ENGINES.md: 0.25–0.4 %)
@@ -173,6 +172,7 @@ class Yade(Engine):
         n_hist = max(1, n_snap // k)
         n_snap = n_hist * k                      # every snapshot step also has a history row
         n_cons = steps_for(CONSOLIDATION_TIME, dt, n_snap)
+        platen_force = case.normal_stress * L * case.thickness
         skin = 0.2 * d_min
         return dict(
             version=__version__, test=case.test, dt=dt, gravity=9.81,
@@ -181,10 +181,12 @@ class Yade(Engine):
             walls=[dict(name="surface" if case.test == "interface" else "lower", index=0, triangles=moving),
                    dict(name="sides" if case.test == "interface" else "upper", index=1, triangles=fixed),
                    dict(name="platen", index=2, triangles=platen)],
-            platen_force=case.normal_stress * L * case.thickness,
-            servo_vmax=min(0.1, 0.5 * skin / (2 * dt)), servo_band=SERVO_BAND,
+            platen_force=platen_force, servo_vmax=min(0.1, 0.5 * skin / (2 * dt)), servo_band=SERVO_BAND,
+            platen_force_lo=(1 - PLATEN_TOLERANCE) * platen_force,
+            platen_force_hi=(1 + PLATEN_TOLERANCE) * platen_force,
             shear_velocity=case.shear_velocity,
-            steps=dict(n_consolidate=n_cons, n_shear=n_shear, n_snapshot=n_snap, n_history=n_hist),
+            steps=dict(n_consolidate=n_cons, n_shear=n_shear, n_snapshot=n_snap, n_history=n_hist,
+                       n_chunk=steps_for(CONSOLIDATION_TIME / 4, dt, n_snap), n_chunks_max=CONSOLIDATION_CHUNKS),
             bounds=[x_lo, x_hi, z_lo, z_hi], window=window,
             exits=[0.0, L] if case.test == "interface" else None,   # grains past these x are out of the box
             thickness=case.thickness, n_grains=pack.n, shear_sign=1,
@@ -203,7 +205,8 @@ class Yade(Engine):
         if self.profile.timeout is not None:
             return self.profile.timeout
         p = json.loads((folder / "params.json").read_text())
-        steps = p["steps"]["n_consolidate"] + p["steps"]["n_shear"]
+        s = p["steps"]
+        steps = s["n_consolidate"] + s["n_chunks_max"] * s["n_chunk"] + s["n_shear"]
         return 60.0 + 5.0 * steps * p["n_grains"] / THROUGHPUT
 
     def command(self) -> list[str]:
@@ -240,7 +243,11 @@ def classify(returncode: int, text: str) -> tuple[str | None, str]:
     """(cause, message) of a finished YADE run; cause None if it succeeded.
 
     A Python traceback in the log is an engine_error whose message is the traceback's last line
-    (the exception); the driver prints 'ERROR: Lost atoms' when grains leave the domain."""
+    (the exception); the driver prints 'ERROR: Lost atoms' when grains leave the domain and
+    'NOT CONSOLIDATED: …' when the platen never settled on its target (the shear is skipped)."""
+    unconsolidated = re.search(r"^NOT CONSOLIDATED: [^\n]*", text, re.MULTILINE)
+    if unconsolidated:
+        return "not_consolidated", unconsolidated.group(0)
     lost = re.search(r"ERROR: Lost atoms[^\n]*", text)
     if lost:
         return "lost_atoms", lost.group(0)

@@ -53,7 +53,10 @@ def _meta(folder: Path) -> dict:
             raise InputError(f"{name} is missing", where=str(folder / name), fix="rerun the case")
     p = json.loads((folder / "params.json").read_text())
     b = json.loads((folder / "bodies.json").read_text())
-    return {"dt": p["dt"], "n_consolidate": p["steps"]["n_consolidate"], "shear_velocity": p["shear_velocity"],
+    # the step the shear started at: written by the driver when consolidation ended
+    start = folder / "shear_start.txt"
+    n0 = int(start.read_text().split()[0]) if start.exists() else p["steps"]["n_consolidate"]
+    return {"dt": p["dt"], "n_consolidate": n0, "shear_velocity": p["shear_velocity"],
             "first": b["first_grain"], "n_grains": b["n_grains"], "walls": b["walls"]}
 
 
