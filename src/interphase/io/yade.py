@@ -10,6 +10,8 @@ python needs nothing beyond the standard library):
                  platen_fz (force of the grains on the platen, +z), platen_z, n_contacts
   bodies.json    first grain id, grain count, [min, max] body ids of each wall group
   params.json    dt, steps, shear velocity (the driver's inputs)
+  shear_start.txt  the step the shear started at, when consolidation ended (time and shear
+                 displacement count from it; folders without it: the first stretch's end)
 The driver already works in the analysis frame (x shear axis, z up, the surface moving −x), so only
 ids and kinds are mapped: grain body i → particle id i − first + 1; wall group k → id1 = −1 − k,
 kind 'ps' for group 0 (rough surface; the lower half in box tests, as the LIGGGHTS reader), else 'pw'.
@@ -56,12 +58,12 @@ def _meta(folder: Path) -> dict:
     # the step the shear started at: written by the driver when consolidation ended
     start = folder / "shear_start.txt"
     n0 = int(start.read_text().split()[0]) if start.exists() else p["steps"]["n_consolidate"]
-    return {"dt": p["dt"], "n_consolidate": n0, "shear_velocity": p["shear_velocity"],
+    return {"dt": p["dt"], "shear_start": n0, "shear_velocity": p["shear_velocity"],
             "first": b["first_grain"], "n_grains": b["n_grains"], "walls": b["walls"]}
 
 
 def _clock(step: np.ndarray, meta: dict) -> tuple[np.ndarray, np.ndarray]:
-    t = (step - meta["n_consolidate"]) * meta["dt"]
+    t = (step - meta["shear_start"]) * meta["dt"]
     return t, t * meta["shear_velocity"]
 
 
