@@ -71,7 +71,9 @@ def _folders(out: Path) -> list[Path]:
 
 
 def _starts(folder: Path) -> int:
-    return sum('"event": "start"' in line for line in (folder / "attempts.jsonl").read_text().splitlines())
+    """Attempts started in a folder; 0 if the kill came between its case.json and attempts.jsonl."""
+    path = folder / "attempts.jsonl"
+    return sum('"event": "start"' in line for line in path.read_text().splitlines()) if path.exists() else 0
 
 
 def _wait_for(cond, timeout: float, what: str):

@@ -184,6 +184,9 @@ SLURM_DEATH = {
 }
 ACTIVE_STATES = ("PENDING", "RUNNING", "REQUEUED", "RESIZING", "SUSPENDED", "CONFIGURING", "COMPLETING",
                  "REQUEUE_HOLD", "REQUEUE_FED", "SIGNALING", "STAGE_OUT")
+#: [s] how long a task that recorded an interruption may wait for SLURM's final job state (TIMEOUT,
+#: CANCELLED, PREEMPTED), whose cause replaces the runner's 'interrupted'
+SLURM_VERDICT_WAIT = 60.0
 
 
 def _slurm_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
@@ -274,6 +277,7 @@ class SlurmExecutor:
                 known[t.case_id] = job.job_id
             self._save_jobs(known)
         announced: set[str] = set()
+        interrupted_at: dict[str, float] = {}
         try:
             while active:
                 time.sleep(self.poll)
@@ -283,9 +287,17 @@ class SlurmExecutor:
                     if state == "RUNNING" and cid not in announced:
                         announced.add(cid)
                         on_event("started", cid, {"slurm_job": job.job_id})
-                    if job.paths.result_pickle.exists() or (state and state not in ACTIVE_STATES):
-                        on_event("finished", cid, self._collect(job, t, state, UncompletedJobError))
-                        del active[cid]
+                    final = bool(state) and state not in ACTIVE_STATES
+                    if not (final or job.paths.result_pickle.exists()):
+                        continue
+                    if not final and st.folder_status(t.folder) == "interrupted":
+                        # the task caught SIGTERM and returned before SLURM closed the job: its
+                        # state (TIMEOUT, CANCELLED, ...) is the verdict, wait for it a while
+                        since = interrupted_at.setdefault(cid, time.monotonic())
+                        if time.monotonic() - since < SLURM_VERDICT_WAIT:
+                            continue
+                    on_event("finished", cid, self._collect(job, t, state, UncompletedJobError))
+                    del active[cid]
         except (KeyboardInterrupt, Interrupted):
             for cid, (job, t) in active.items():
                 try:
