@@ -1,7 +1,7 @@
 """Analysis on real LIGGGHTS output (tests/data/liggghts_sawtooth45: 45° saw-tooth, well-graded
-grains, 1800 in a 60 × 30 D50 box, μs = 0.5, 4 mm of shear; made by tests/data/make_liggghts_sawtooth45.py): the
-study's physical relations at the peak snapshot, measured in the window away from the side walls
-(Case.window)."""
+grains, 1800 in a 60 × 30 D50 box, μs = 0.5, 4 mm of shear; made by
+tests/data/make_liggghts_sawtooth45.py): the study's physical relations at the peak snapshot,
+measured in the window away from the side walls (Case.window)."""
 
 from __future__ import annotations
 

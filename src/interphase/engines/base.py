@@ -139,6 +139,15 @@ def template_root() -> Path:
     return Path(__file__).resolve().parents[3] / "templates"
 
 
+def not_consolidated(text: str) -> str | None:
+    """The 'NOT CONSOLIDATED: …' line both engines' drivers print when the consolidation loop ran
+    out with the platen force outside its band (engines.device; the shear was skipped), else None."""
+    import re
+
+    m = re.search(r"^NOT CONSOLIDATED: [^\n]*", text, re.MULTILINE)
+    return m.group(0) if m else None
+
+
 def log_tail(path: str | os.PathLike, lines: int = 30) -> str:
     try:
         with open(path, "rb") as fh:

@@ -34,7 +34,8 @@ import numpy as np
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
+from interphase.engines.base import (Engine, EngineError, EngineProfile, Results, log_tail, not_consolidated, register,
+                                     run_logged, steps_for)
 from interphase.engines.device import CONSOLIDATION_CHUNKS, CONSOLIDATION_TIME, PLATEN_TOLERANCE, side_walls
 from interphase.engines.packing import lattice_packing, write_liggghts_data
 from interphase.engines.render import environment
@@ -238,11 +239,11 @@ class Liggghts(Engine):
         leak = check_grain_balance(folder)
         if leak:
             raise EngineError("lost_atoms", leak, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
-        unconsolidated = re.search(r"^NOT CONSOLIDATED: .*$", text, re.MULTILINE)
-        if unconsolidated:
+        unsettled = not_consolidated(text)
+        if unsettled:
             # the deck skipped the shear: a platen that never settled on its target would shear
             # the soil under another stress (one well-graded seed: a servo limit cycle, 1.4 × σ)
-            raise EngineError("not_consolidated", unconsolidated.group(0), command=cmd, returncode=rc,
+            raise EngineError("not_consolidated", unsettled, command=cmd, returncode=rc,
                               log_tail=log_tail(log), folder=folder)
         cause = classify(rc, text)
         if cause:

@@ -32,7 +32,8 @@ from pathlib import Path
 
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import Engine, EngineError, EngineProfile, Results, log_tail, register, run_logged, steps_for
+from interphase.engines.base import (Engine, EngineError, EngineProfile, Results, log_tail, not_consolidated, register,
+                                     run_logged, steps_for)
 from interphase.engines.device import CONSOLIDATION_CHUNKS, CONSOLIDATION_TIME, PLATEN_TOLERANCE, side_walls
 from interphase.engines.packing import lattice_packing
 from interphase.engines.render import environment
@@ -245,9 +246,9 @@ def classify(returncode: int, text: str) -> tuple[str | None, str]:
     A Python traceback in the log is an engine_error whose message is the traceback's last line
     (the exception); the driver prints 'ERROR: Lost atoms' when grains leave the domain and
     'NOT CONSOLIDATED: …' when the platen never settled on its target (the shear is skipped)."""
-    unconsolidated = re.search(r"^NOT CONSOLIDATED: [^\n]*", text, re.MULTILINE)
-    if unconsolidated:
-        return "not_consolidated", unconsolidated.group(0)
+    unsettled = not_consolidated(text)
+    if unsettled:
+        return "not_consolidated", unsettled
     lost = re.search(r"ERROR: Lost atoms[^\n]*", text)
     if lost:
         return "lost_atoms", lost.group(0)
