@@ -1,4 +1,4 @@
-"""Contact anisotropy (METHODS.md §5): exact recovery, noisy recovery, θr examples, the sign check,
+"""Contact anisotropy (docs/methods.md §5): exact recovery, noisy recovery, θr examples, the sign check,
 invariances (hypothesis) and degenerate input."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Bilinear fits (METHODS.md §7): exact breakpoints, intervals, invariances, the study's set."""
+"""Bilinear fits (docs/methods.md §7): exact breakpoints, intervals, invariances, the study's set."""
 
 import math
 

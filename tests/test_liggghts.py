@@ -147,7 +147,7 @@ def test_irregular_whitespace_reads_the_same(engine, run, tmp_path):
 def test_summed_surface_contacts_equal_mesh_force(run):
     """Normal (z) component on a flat surface, where every contact slides and no ridge doubles a
     contact: to 1e−3. (x is off by the tangential damping term that LIGGGHTS dumps but does not apply
-    at sliding contacts, ENGINES.md; see docs/liggghts.md.)"""
+    at sliding contacts, docs/engines.md; see docs/liggghts.md.)"""
     _, res = run(tiny(friction_ps=0.2))
     c, h = res.contacts, res.history
     ps = c[c.kind == "ps"].groupby("time")[["fx", "fz"]].sum()

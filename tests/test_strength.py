@@ -1,4 +1,4 @@
-"""Strength (METHODS.md §6): stress ratio signs, peak under noise, residual, dilation, efficiency,
+"""Strength (docs/methods.md §6): stress ratio signs, peak under noise, residual, dilation, efficiency,
 inertial number, shear rate and shear band."""
 
 from __future__ import annotations

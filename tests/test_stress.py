@@ -1,4 +1,4 @@
-"""Average stress (METHODS.md §6): the lattice example at arbitrary offsets, clipping, readings,
+"""Average stress (docs/methods.md §6): the lattice example at arbitrary offsets, clipping, readings,
 the model q/p, the sampling rectangle and degenerate input."""
 
 from __future__ import annotations

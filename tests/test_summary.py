@@ -57,7 +57,7 @@ def test_row_values_on_real_output(real):
     assert r["peak_snapshot"] == int(np.argmin(np.abs(snaps.to_numpy() - r["shear_disp_at_peak"])))
     assert r["n_contacts_surface"] > 0
     assert r["theta_r_surface_deg"] > 0            # the surface resists toward −x
-    # the 45° saw-tooth with Rt = D50: METHODS §3 table (filter 92: 39.35°, 90: 38.94°), Rn = 0.75
+    # the 45° saw-tooth with Rt = D50: docs/methods.md §3 table (filter 92: 39.35°, 90: 38.94°), Rn = 0.75
     assert r["theta_a_deg_92"] == pytest.approx(39.35, abs=0.05)
     assert r["theta_a_deg_90"] == pytest.approx(38.94, abs=0.05)
     assert r["rn"] == pytest.approx(0.75, abs=1e-3)

@@ -24,7 +24,7 @@ D50 = 0.7e-3
 
 
 def closed_form_psi(alpha_deg, h, eps_deg, r=0.5):
-    """METHODS.md §3 closed form for a symmetric saw-tooth (h, r in D50 units), degrees."""
+    """docs/methods.md §3 closed form for a symmetric saw-tooth (h, r in D50 units), degrees."""
     a, e = math.radians(alpha_deg), math.radians(eps_deg)
     lf = h / math.sin(a) - r * math.tan(a)
     return math.degrees(a / 2 + 0.5 * math.atan2(lf * math.sin(a) + r * math.sin(a - e) * math.sin(e),
@@ -39,7 +39,7 @@ def test_code_matches_closed_form_away_from_the_table(alpha, h):
 
 
 def spaced_closed_form_psi(alpha_deg, h, sr, eps_deg, r=0.5):
-    """Group 2 (flat spacing sr ≥ 2r·tan(α/2), D50 units), derived like METHODS.md §3: the feet are
+    """Group 2 (flat spacing sr ≥ 2r·tan(α/2), D50 units), derived like docs/methods.md §3: the feet are
     concave corners, so the trace has cusps there; each face run shortens to Lf' = h/sinα − r·tan(α/2)
     and the flat run is Lflat = sr − 2r·tan(α/2) at ψ = 0, kept only by the ≥ 90° filter:
     ψa = ½·arg(e^{iα}[Lf'·e^{iα} + r·sin(α−ε)·e^{iε}] + [ε = 0]·Lflat)."""

@@ -1,4 +1,4 @@
-"""METHODS.md §2–4 test values: centroid trace, θa (both filters), Rn, and the invariances."""
+"""docs/methods.md §2–4 test values: centroid trace, θa (both filters), Rn, and the invariances."""
 
 import math
 
@@ -14,7 +14,7 @@ from interphase.surface.trace import centroid_trace, dilate_half_disk
 
 D50 = 0.7e-3
 
-# METHODS.md §3 table: α, h/D50, ψa (≥ 90°), ψa (> 92°)
+# docs/methods.md §3 table: α, h/D50, ψa (≥ 90°), ψa (> 92°)
 TABLE = [(45, 1, 38.94, 39.35), (30, 1, 28.15, 28.36), (60, 1, 41.71, 42.49),
          (45, 0.5, 30.66, 31.50), (45, 2, 42.23, 42.42)]
 
@@ -25,7 +25,7 @@ def saw(alpha_deg, h, periods=3):
 
 
 def closed_form(alpha_deg, h, eps_deg):
-    """ψa of METHODS.md §3 from Lf and r (D50 units)."""
+    """ψa of docs/methods.md §3 from Lf and r (D50 units)."""
     a, e, r = math.radians(alpha_deg), math.radians(eps_deg), 0.5
     lf = h / math.sin(a) - r * math.tan(a)
     return math.degrees(a / 2 + 0.5 * math.atan2(lf * math.sin(a) + r * math.sin(a - e) * math.sin(e),

@@ -115,7 +115,7 @@ class Case:
         surface into the bottom edge of the leading side wall wedges there, and that force loop
         (surface → grain → wall) never passes through the soil; on a 45° saw-tooth it made the
         whole-surface ratio peak at 1.27 where the window's peaked at 0.72 (1000 grains,
-        docs/liggghts.md). A departure from METHODS.md, which takes [0, L]. Box tests: [0, L]."""
+        docs/liggghts.md). A departure from docs/methods.md, which takes [0, L]. Box tests: [0, L]."""
         if self.test != "interface":
             return (0.0, self.box_length)
         return (WALL_ZONE_D50 * self.d50, self.box_length - WALL_ZONE_D50 * self.d50)

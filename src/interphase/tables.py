@@ -1,6 +1,6 @@
 """Column contracts of the two tables every engine reader produces and every analysis consumes.
 
-ContactTable: one row per contact per snapshot, in the analysis frame of METHODS.md §0 (x = shear
+ContactTable: one row per contact per snapshot, in the analysis frame of docs/methods.md §0 (x = shear
 axis with the soil moving +x relative to the surface, z up into the soil). Units: m, N, s.
   n = unit normal from body 1 to body 2 (wall/surface contact: from the contact point into the
   particle, body 2 is the particle); force columns are the force ON body 2;

@@ -1,4 +1,4 @@
-"""Symmetric 2×2 tensor helpers and the two angle readings of METHODS.md §0.
+"""Symmetric 2×2 tensor helpers and the two angle readings of docs/methods.md §0.
 
 A tensor is given by its components (x11, x22, x12), arrays allowed (broadcast).
 θ: radians counterclockwise from +x in [0, π). ψ: θ − π/2, tilt from vertical (positive toward −x).

@@ -1,4 +1,4 @@
-"""Contact anisotropy (METHODS.md §5): Rothenburg–Bathurst second-order Fourier forms.
+"""Contact anisotropy (docs/methods.md §5): Rothenburg–Bathurst second-order Fourier forms.
 
 Model: E(θ) = (1/2π)[1 + a·cos2(θ−θa)], f̄n(θ) = f0[1 + an·cos2(θ−θn)], f̄t(θ) = −f0·at·sin2(θ−θt).
 
@@ -16,7 +16,7 @@ At the surface (`surface_anisotropy`, 'ps' contacts) θn uses the force-weighted
 and a_n_surface = aniso of that tensor; the angle of the summed force on the grains,
 ψF = atan2(−Σfx, Σfz), is reported too (it equals atan(μs) at the same snapshot).
 
-Sign (METHODS §0): in the analysis frame the soil moves +x relative to the surface. For a 'ps'
+Sign (docs/methods.md §0): in the analysis frame the soil moves +x relative to the surface. For a 'ps'
 contact n points from the surface into the grain and f is the force ON THE GRAIN; the surface pushes
 the grains up and toward −x, so θr, θn and ψF come out positive (toward −x) when the surface resists.
 R and the normal tensors are even in f, so using the force on the surface (−f) changes nothing.
@@ -130,7 +130,7 @@ def _join(*parts: np.ndarray) -> np.ndarray:
 # ---- tensor method --------------------------------------------------------------------------
 
 def tensor_method(nx, nz, fn, ft, weight=None, group=None, keys=None) -> pd.DataFrame:
-    """Fabric and force anisotropy of METHODS §5 by the tensor method, one row per group.
+    """Fabric and force anisotropy of docs/methods.md §5 by the tensor method, one row per group.
 
     nx, nz: contact normals (any length, renormalised); fn, ft [N]: normal and tangential force
     (fn = f·n, ft = f·t, t = (−nz, nx)); weight: optional per-contact weight ≥ 0; group: optional

@@ -1,4 +1,4 @@
-"""Bilinear correlations (METHODS.md §7) and the study's correlation set (Figs 6.3, 6.7–6.10a).
+"""Bilinear correlations (docs/methods.md §7) and the study's correlation set (Figs 6.3, 6.7–6.10a).
 
 Two models, both continuous at the breakpoint c (same units as x):
     hinge    y = b0 + b1·x + b2·(x − c)₊        coefficients (b0, b1, b2), slope b1 then b1 + b2
@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-MIN_SIDE = 3          # points on each side of the breakpoint (METHODS.md §7)
+MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
 MODELS = ("hinge", "plateau")
 N_GRID_MAX = 400      # candidate breakpoints evaluated exactly (data x + midpoints, thinned beyond)

@@ -1,4 +1,4 @@
-"""The failure criterion (seed §6.4.3–6.4.5, METHODS.md §7): profile → θa → θr → E → tan δ.
+"""The failure criterion (seed §6.4.3–6.4.5, docs/methods.md §7): profile → θa → θr → E → tan δ.
 
 Chain, as the study prescribes (§6.4.4):
   * most surfaces: θa with the > 92° filter, θr from the θa–θr correlation (Fig. 6.8, the fit of the

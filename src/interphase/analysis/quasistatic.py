@@ -1,6 +1,6 @@
 """Quasi-static checks of a finished run (engine-free: Case + Results → a dict for the summary).
 
-- inertial number I = γ̇·D50 / sqrt(σn/ρ) (METHODS.md §6, `strength.inertial_number`), γ̇ the largest
+- inertial number I = γ̇·D50 / sqrt(σn/ρ) (docs/methods.md §6, `strength.inertial_number`), γ̇ the largest
   layer-to-layer shear rate of the measured velocity profile (`strength.shear_rate_from_profile`,
   1-D50 layers, snapshots after the first). Quasi-static means I < 1e−3.
 - overlaps: max and mean contact overlap / D50.
@@ -25,7 +25,7 @@ QUASI_STATIC_I = 1e-3
 
 
 def checks(case: Case, results) -> dict:
-    """The quasi-static checks of METHODS.md/issue 3 as a flat dict (NaN where not computable)."""
+    """The quasi-static checks of docs/methods.md/issue 3 as a flat dict (NaN where not computable)."""
     out: dict = {}
     parts = results.particles
     if parts is not None and not parts.empty:

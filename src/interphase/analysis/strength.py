@@ -1,4 +1,4 @@
-"""Interface and box strength from History, Particles and ContactTable (METHODS.md §6).
+"""Interface and box strength from History, Particles and ContactTable (docs/methods.md §6).
 
 Stress ratio at the surface: μs(t) = ΣFx/Σ(−Fz), F = force ON the surface [N] from the grains in
 the measuring window (History's window_fx, window_fz: Case.window, away from the side walls; or the
@@ -83,7 +83,7 @@ def load_balanced(history: pd.DataFrame, tolerance: float | None = MAX_LOAD_MISM
 
 def contact_stress_ratio(contacts: pd.DataFrame) -> pd.Series:
     """μs per snapshot from the 'ps' contacts: ΣFx/Σ(−Fz) with F = −f the force on the surface.
-    (Dumped tangential forces of sliding contacts include damping, ENGINES.md: prefer History.)"""
+    (Dumped tangential forces of sliding contacts include damping, docs/engines.md: prefer History.)"""
     require_columns(contacts, ("snapshot", "kind", "fx", "fz"))
     ps = contacts[contacts["kind"].eq("ps").to_numpy()]
     sums = ps.groupby("snapshot")[["fx", "fz"]].sum()
@@ -249,7 +249,7 @@ def shear_rate_from_profile(particles: pd.DataFrame, snapshots=None, bin_height:
     method "max" (default): the largest |dvx/dz| of central differences between layers holding at
     least `min_count` grain rows — where the shear localises, the conservative choice for a
     quasi-static check (I < 1e−3). method "mean": |vx(top layer) − vx(bottom layer)|/(their distance),
-    the band average (the METHODS.md example: v = 1 mm/s over a 10 mm band → 0.1 1/s).
+    the band average (the docs/methods.md example: v = 1 mm/s over a 10 mm band → 0.1 1/s).
     NaN if fewer than two usable layers."""
     if method not in ("max", "mean"):
         raise ValueError(f"method must be 'max' or 'mean', got {method!r}")

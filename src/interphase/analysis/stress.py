@@ -1,4 +1,4 @@
-"""Average stress tensor in a sampling rectangle (METHODS.md §6), principal direction, τ/σ and q/p.
+"""Average stress tensor in a sampling rectangle (docs/methods.md §6), principal direction, τ/σ and q/p.
 
 σ_ij = (1/A) Σ_c f_i·l_j, f = force on body 2 [N], l = x2 − x1 the branch vector [m] (a wall contact:
 from the contact point to the grain centre), of which only the part inside the rectangle counts
@@ -12,8 +12,8 @@ soil toward −x, so σxz < 0 there. `stress_ratio` = τ/σ = −σxz/σzz is th
 surface resists, like μs. q = √(¼(σxx−σzz)² + σxz²), p = ½(σxx+σzz). The major principal direction
 `principal` = dir(σ) (radians ccw), reported as ψ in `principal_deg` (positive toward −x).
 
-Sampling rectangle (`sampling_rectangle`): x over the soil box [0, L] (the rough surface under the
-soil), z from the top of the centroid trace (= highest profile point + D50/2, the trace being a
+Sampling rectangle (`sampling_rectangle`): x over the measuring window (Case.window: the soil box
+less 3 D50 at each side wall), z from the top of the centroid trace (= highest profile point + D50/2, the trace being a
 half-disk dilation) up 20·D50 (14 mm at D50 = 0.7 mm), lowered to `soil_top` when the soil is
 thinner than that (small test boxes): the region must not reach into the empty space under the
 platen, which would dilute the stress (not the ratios).
@@ -127,7 +127,7 @@ def trace_top(case) -> float:
 def sampling_rectangle(case, z_bottom: float, soil_top: float | None = None,
                        height_d50: float = REGION_HEIGHT_D50) -> tuple[float, float, float, float]:
     """(x0, x1, z0, z1) [m]: the measuring window (Case.window: the soil box [0, L] less 3 D50 at each
-    side wall — a departure from METHODS.md's [0, L], see Case.window) × [z_bottom, z_bottom +
+    side wall — a departure from docs/methods.md's [0, L], see Case.window) × [z_bottom, z_bottom +
     20·D50], its top lowered to `soil_top` [m] when given and lower."""
     top = z_bottom + height_d50 * case.d50
     if soil_top is not None and np.isfinite(soil_top):

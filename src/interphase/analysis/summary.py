@@ -1,6 +1,6 @@
 """One Summary per case: the peak state of an interface (or box) test as a flat row plus series.
 
-`summarise(case, results)` reads Results (contacts, history, particles; analysis frame, METHODS §0)
+`summarise(case, results)` reads Results (contacts, history, particles; analysis frame, docs/methods.md §0)
 and returns Summary(row, series). Others read these row keys (values JSON-able; NaN written as null):
 
   test, peak_stress_ratio (tan δ interface / tan φ box), peak_stress_ratio_raw, shear_disp_at_peak [m],
@@ -16,18 +16,18 @@ and returns Summary(row, series). Others read these row keys (values JSON-able; 
   shear_rate [1/s], inertial_number, quasi_static, theta_a_deg_92, theta_a_deg_90, rn, rnc,
   mean_slope_deg, reasons {key: why it is NaN, or a note}.
 
-Choices (where METHODS.md is silent):
+Choices (where docs/methods.md is silent):
 - Peak: the maximum of a centred moving average of the History stress ratio over PEAK_WINDOW_D50 ·
   D50 of shear displacement (strength.py); the state quantities come from the contact snapshot
   nearest the peak among those whose smoothed ratio is within 5 % of the peak (`peak_snapshot`,
   strength.peak_snapshot): on a sliding plateau the plain nearest one can be the start of shear.
 - Measuring window (Case.window): interface tests measure over the grains whose centres lie 3 D50 or
   more from either side wall — History's window_fx/fz for μs, the 'ps' contacts of those grains for
-  the surface anisotropy, and the sampling region's x range. A departure from METHODS.md (which
+  the surface anisotropy, and the sampling region's x range. A departure from docs/methods.md (which
   takes the whole surface [0, L]): grains wedged under the leading wall's edge load the surface
   through the wall, not through the soil (docs/liggghts.md has the measurements).
 - Interface tests: the surface = 'ps' contacts; μs from History (the mesh force: dumped tangential
-  forces at sliding contacts include damping, ENGINES.md, which biases sums of contact forces and
+  forces at sliding contacts include damping, docs/engines.md, which biases sums of contact forces and
   thus θr slightly toward the shear direction on sliding flats; at sticking contacts they agree).
 - Box tests: no 'ps' contacts; peak_stress_ratio = peak of surface_fx/|normal_force| (the lower
   half's horizontal force over the platen force, i.e. τ/σ on the shear plane); the surface

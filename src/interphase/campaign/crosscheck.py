@@ -176,7 +176,7 @@ def seed_means(summaries: dict[str, dict[str, dict]], roles: dict[str, str]):
     """Cases that differ only in their packing seed (labels ending -s<seed>) → per-engine means over
     the seeds that BOTH engines finished, as pseudo-cases "<label> [n seeds]" (with sd columns).
 
-    Why: single 200-grain cases scatter ~10 % between seeds (ENGINES.md); engines are compared on
+    Why: single 200-grain cases scatter ~10 % between seeds (docs/engines.md); engines are compared on
     seed means, and the per-seed rows stay in the table for reference. Empty if no label repeats."""
     groups: dict[str, list[str]] = {}
     for label in summaries:

@@ -125,7 +125,7 @@ def estimate_grains(case: Case) -> int:
 
 
 def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
-    """Rough engine run time [s]: particle-steps / throughput (ENGINES.md: 1.5–4e6 steps/s on one core),
+    """Rough engine run time [s]: particle-steps / throughput (docs/engines.md: 1.5–4e6 steps/s on one core),
     with the LIGGGHTS deck's own time step and consolidation time. Used for SLURM time limits; the
     engine's own timeout is separate."""
     from interphase.engines.device import CONSOLIDATION_TIME

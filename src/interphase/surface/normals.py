@@ -1,4 +1,4 @@
-"""Surface-normal distribution of the centroid trace and its principal direction θa (METHODS.md §3).
+"""Surface-normal distribution of the centroid trace and its principal direction θa (docs/methods.md §3).
 
 Trace segment i (Δx_i > 0, Δc_i): outward normal angle θ_i = atan2(Δx_i, −Δc_i) in (0, π), weight
 w_i = segment length. Keep the resisting side (normals tilted toward −x in the analysis frame: the
@@ -82,7 +82,7 @@ class ThetaA:
 
 
 def theta_a(profile: Profile, d50: float, filt: int = 92, dx: float | None = None) -> ThetaA:
-    """θa of `profile` [m] for grains of median diameter d50 [m] (METHODS.md §2–4)."""
+    """θa of `profile` [m] for grains of median diameter d50 [m] (docs/methods.md §2–4)."""
     return theta_a_filters(profile, d50, (filt,), dx)[filt]
 
 

@@ -1,6 +1,6 @@
 """Surface profiles z(x): the study's generated groups and the dispatch from a ProfileSpec.
 
-A Profile is a polyline in metres. Generated profiles (METHODS.md §1) take sizes in D50 units and
+A Profile is a polyline in metres. Generated profiles (docs/methods.md §1) take sizes in D50 units and
 return their exact corner vertices, so nothing is lost before the centroid trace resamples them.
 Periodic convention: a periodic profile stores one closing vertex, z[-1] == z[0], and its period is
 x[-1] − x[0]; z(x + period) = z(x).
@@ -81,7 +81,7 @@ def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: fl
                    name: str | None = None) -> Profile:
     """Group 4: a random walk of straight segments (sizes in D50 units), a pure function of its args.
 
-    Project's law (METHODS.md §1 leaves it open):
+    Project's law (docs/methods.md §1 leaves it open):
       - segment i has horizontal projection au·m_i and vertical projection ar·au·k_i, with the
         multipliers m_i, k_i drawn independently from Uniform(0.5, 1.5) (mean 1: au and ar stay the
         mean projections);

@@ -1,4 +1,4 @@
-"""Normalised roughness Rn (Kishida & Uesugi 1987) and Rnc(D50) (METHODS.md §4).
+"""Normalised roughness Rn (Kishida & Uesugi 1987) and Rnc(D50) (docs/methods.md §4).
 
 Rn = Rt,ave(L = D50)/D50: the mean over every window start of (max − min) within a window of length
 D50 of the centerline-corrected profile; O(N) with running max/min filters (scipy.ndimage).

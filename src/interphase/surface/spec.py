@@ -1,7 +1,7 @@
 """ProfileSpec: the engine-free reference to a surface profile that a Case carries.
 
 A spec is data (hashable, canonical), not the profile itself: `interphase.surface.profiles.from_spec`
-builds the Profile. Sizes in `params` are in D50 units (METHODS.md §1); a file spec carries the
+builds the Profile. Sizes in `params` are in D50 units (docs/methods.md §1); a file spec carries the
 file's SHA-256 so that a case's identity follows the file's content, not its path.
 
 kinds and their params:

@@ -1,4 +1,4 @@
-"""Particle centroid trace (METHODS.md §2, DeJong et al. 2002).
+"""Particle centroid trace (docs/methods.md §2, DeJong et al. 2002).
 
 c(x) = max over |u| ≤ r of [ z(x+u) + sqrt(r² − u²) ], r = D50/2: the path of the centre of a disk
 rolled over the profile, a grey-scale dilation by a half-disk (not a closing). Computed exactly on a
@@ -17,7 +17,7 @@ import numpy as np
 from interphase.errors import InputError
 from interphase.surface.profiles import Profile
 
-#: default grid: D50/2000 keeps θa of the METHODS.md saw-tooth table within 0.035° (D50/500: 0.13°);
+#: default grid: D50/2000 keeps θa of the docs/methods.md saw-tooth table within 0.035° (D50/500: 0.13°);
 #: long profiles coarsen it so that N·K stays under WORK_BUDGET shifts, never coarser than D50/200
 DEFAULT_STEPS_PER_D50 = 2000
 COARSEST_STEPS_PER_D50 = 200
