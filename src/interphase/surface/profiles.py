@@ -81,39 +81,52 @@ def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: fl
                    name: str | None = None) -> Profile:
     """Group 4: a random walk of straight segments (sizes in D50 units), a pure function of its args.
 
-    Project's law (docs/methods.md §1 leaves it open):
-      - segment i has horizontal projection au·m_i and vertical projection ar·au·k_i, with the
-        multipliers m_i, k_i drawn independently from Uniform(0.5, 1.5) (mean 1: au and ar stay the
-        mean projections);
-      - sign rule: each segment goes up or down with probability ½ (numpy PCG64 seeded by `seed`);
+    Project's law (the study leaves it open; docs/methods.md):
+      - segment i has horizontal projection au·m_i and slope ar·k_i (so vertical projection
+        ar·au·m_i·k_i), the multipliers m_i, k_i drawn independently from Uniform(0.5, 1.5) (mean 1:
+        au and ar stay the mean projection and the mean slope);
+      - sign rule: each segment goes up or down with probability ½;
       - bound rule: the running height stays in [0, rtmax]: a step that would leave the band is
-        reflected (its sign flipped); if the reflected step leaves it too (a step longer than the
-        band allows either way), the segment runs to the farther bound, so no segment is flat.
+        reflected (its sign flipped); if the reflected step leaves it too, the segment runs at its
+        own slope to the farther bound and ends there (shorter than au·m_i). The slope is kept, so
+        profiles whose steps all overshoot the band (Table 6.2's D and G) still differ by their Ar.
         The walk starts at rtmax/2.
+      - the draws come three per segment in segment order (numpy PCG64 seeded by `seed`), so a
+        longer profile extends a shorter one of the same seed: the profile an engine shears and
+        the one the analysis measures are the same surface whatever length each asks for.
     """
     if au <= 0 or ar <= 0 or rtmax <= 0:
         raise InputError(f"need au, ar, rtmax > 0 (D50 units), got {au}, {ar}, {rtmax}", where="random profile")
     rng = np.random.default_rng(int(seed))
-    n = max(2, math.ceil(length / (au * d50 * 0.5)) + 1)   # enough segments even if all multipliers are 0.5
-    m = rng.uniform(0.5, 1.5, n)
-    k = rng.uniform(0.5, 1.5, n)
-    sign = np.where(rng.random(n) < 0.5, -1.0, 1.0)
-    dz = ar * au * k * sign
-    # the bound rule is sequential (each step depends on the height so far); n is a few hundred
-    z = np.empty(n + 1)
-    z[0] = rtmax / 2
-    for i in range(n):
-        up, down = z[i] + dz[i], z[i] - dz[i]
-        if 0.0 <= up <= rtmax:
-            z[i + 1] = up
-        elif 0.0 <= down <= rtmax:
-            z[i + 1] = down
-        else:
-            z[i + 1] = 0.0 if z[i] > rtmax / 2 else rtmax
-    x = np.concatenate([[0.0], np.cumsum(au * m)])
-    keep = np.searchsorted(x, length / d50, side="left") + 1   # first vertex at or past `length`
-    return Profile(x[:keep] * d50, z[:keep] * d50, periodic=False,
+    target = length / d50
+    xs, zs = [0.0], [rtmax / 2]
+    # the bound rule is sequential (each step depends on the height so far); a few hundred segments
+    while xs[-1] < target:
+        for u_m, u_k, u_s in rng.random((256, 3)):
+            h, slope = au * (0.5 + u_m), ar * (0.5 + u_k)
+            dz = slope * h * (-1.0 if u_s < 0.5 else 1.0)
+            z = zs[-1]
+            if 0.0 <= z + dz <= rtmax:
+                z_new = z + dz
+            elif 0.0 <= z - dz <= rtmax:
+                z_new = z - dz
+            else:
+                z_new = 0.0 if z > rtmax / 2 else rtmax
+                h = abs(z_new - z) / slope
+            xs.append(xs[-1] + h)
+            zs.append(z_new)
+            if xs[-1] >= target:
+                break
+    return Profile(np.array(xs) * d50, np.array(zs) * d50, periodic=False,
                    name=name or f"random-au{au:g}-ar{ar:g}-rtmax{rtmax:g}-seed{seed}")
+
+
+def crop(profile: Profile, x0: float, x1: float) -> Profile:
+    """The part of a profile over [x0, x1] [m], end points interpolated (an open profile)."""
+    inside = (profile.x > x0) & (profile.x < x1)
+    x = np.concatenate([[x0], profile.x[inside], [x1]])
+    z = np.interp(x, profile.x, profile.z)
+    return Profile(x, z, periodic=False, name=profile.name)
 
 
 def tile(profile: Profile, length: float) -> Profile:
