@@ -92,14 +92,11 @@ def _output_path(path: str) -> str:
 
 
 def _load_measured(path: str, units, cutoff_mm=None):
-    from interphase.surface.readers import prepare_measured, read_profile
+    from interphase.surface.readers import load_profile
 
-    if units is not None:
-        from interphase.surface.profiles import units_factor
-        units_factor(units)   # refuse unknown units before reading
     if cutoff_mm is not None and not cutoff_mm > 0:
         raise InputError(f"must be a positive length in mm, got {cutoff_mm!r}", where="--cutoff")
-    return prepare_measured(read_profile(path, units=units), None if cutoff_mm is None else cutoff_mm * 1e-3)
+    return load_profile(path, units, None if cutoff_mm is None else cutoff_mm * 1e-3)
 
 
 def _cmd_theta_a(args) -> int:
@@ -163,21 +160,9 @@ def _add_engine(sub) -> None:
 
 
 def _load_case(path: str):
-    import tomllib
-    from pathlib import Path
+    from interphase.case import load_case_file
 
-    from interphase.case import case_from_dict
-
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except FileNotFoundError:
-        raise InputError("file not found", where=path, fix="give a TOML file with a [case] table") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"TOML syntax error: {exc}", where=path) from None
-    if "case" not in data or not isinstance(data["case"], dict):
-        raise InputError("no [case] table", where=path, fix="put the Case fields under [case]")
-    return case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
+    return load_case_file(path)
 
 
 def _cmd_render(args) -> int:
@@ -195,32 +180,23 @@ def _cmd_render(args) -> int:
 def _cmd_run_case(args) -> int:
     from pathlib import Path
 
-    from interphase.engines.base import EngineError, get_engine
+    from interphase.campaign.runner import run_single
 
-    case = _load_case(args.case)
-    engine = get_engine(args.engine)
     folder = Path(args.output)
-    engine.write_input(case, folder)
-    try:
-        engine.execute(folder)
-    except EngineError as exc:
-        print(f"campaign run-case: {args.engine} failed: {exc}", file=sys.stderr)
+    res = run_single(_load_case(args.case), args.engine, folder)
+    if res["status"] != "done":
+        print(f"campaign run-case: {args.engine} {res['status']}: {res['cause']}: {res['message']}", file=sys.stderr)
         return 1
-    res = engine.read_results(folder)
-    res.contacts.to_parquet(folder / "contacts.parquet")
-    res.history.to_parquet(folder / "history.parquet")
-    if res.particles is not None:
-        res.particles.to_parquet(folder / "particles.parquet")
-    h = res.history
-    ratio = (h.window_fx / -h.window_fz).rolling(9, center=True, min_periods=1).mean()   # measuring window
-    out = {"folder": str(folder), "contacts": str(folder / "contacts.parquet"),
-           "history": str(folder / "history.parquet"), "peak_stress_ratio": float(ratio.max()),
-           "n_snapshots": int(res.contacts.snapshot.nunique())}
+    row = res["summary"]
+    out = {"folder": str(folder), "skipped": res["skipped"], "summary": str(folder / "summary.json"),
+           **{name: str(folder / f"{name}.parquet") for name in ("contacts", "history", "particles", "series")},
+           **{k: row.get(k) for k in ("peak_stress_ratio", "shear_disp_at_peak", "peak_at_end", "peak_snapshot",
+                                      "theta_r_surface_deg", "theta_r_surface_mean_deg", "surface_force_angle_deg")}}
     if args.json:
         _print_json(out)
     else:
         for k, v in out.items():
-            print(f"{k:18s} {v}")
+            print(f"{k:24s} {v}")
     return 0
 
 
@@ -350,8 +326,8 @@ def _cmd_report(args) -> int:
 def _cmd_predict(args) -> int:
     import math
 
-    from interphase.analysis.criterion import CriterionModel, predict, regular_flat_spacing
-    from interphase.surface.normals import theta_a_filters
+    from interphase.analysis.criterion import predict_profile
+    from interphase.report.build import criterion_model
 
     d50 = _d50_m(args.d50)
     if not (math.isfinite(args.friction) and args.friction >= 0):
@@ -359,24 +335,10 @@ def _cmd_predict(args) -> int:
     if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
         raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
     prof = _load_measured(args.profile, args.units)
-    t = theta_a_filters(prof, d50, (92, 90))
-    t92, t90 = t[92], t[90]
-    flat_spaced, why = regular_flat_spacing(prof.x, prof.z, d50)
-    if args.fit:
-        from interphase.report.build import fitted_model
-
-        model = fitted_model(args.fit)
-        if args.tan_phi is not None:
-            model.tan_phi = args.tan_phi
-        if not math.isfinite(model.tan_phi):
-            raise InputError("the campaign has no finished box test, so no tan φ", where="--fit",
-                             fix="give --tan-phi")
-    else:
-        model = CriterionModel.study_defaults(args.friction, args.tan_phi)
-    p = predict(model, args.friction, t92.theta_a_deg, t90.theta_a_deg, flat_spaced, args.filter)
-    out = p.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "flat_spaced": flat_spaced,
-                         "flat_spacing_reason": why, "theta_a_deg_92": t92.theta_a_deg, "theta_a_deg_90": t90.theta_a_deg,
-                         "mean_slope_deg": t92.mean_slope_deg}
+    model = criterion_model(args.friction, args.fit, args.tan_phi)
+    res = predict_profile(model, prof, d50, args.friction, args.filter)
+    p, flat_spaced, why = res.prediction, res.flat_spaced, res.flat_spacing_reason
+    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50}
     if args.json:
         _print_json(out)
         return 0
@@ -384,7 +346,7 @@ def _cmd_predict(args) -> int:
     if model.is_default:
         print("*** STUDY DEFAULTS: approximate readings of the study's published figures, not fitted correlations ***")
     print(f"profile     {args.profile}  (D50 = {args.d50:g} mm, tan φμ = {args.friction:g}, source: {p.source})")
-    print(f"surface     {'regular flat spacing: ' if flat_spaced else ''}{why}; mean asperity slope {t92.mean_slope_deg:.2f}°")
+    print(f"surface     {'regular flat spacing: ' if flat_spaced else ''}{why}; mean asperity slope {res.mean_slope_deg:.2f}°")
     print(f"branch      {p.branch}, θa filter {p.filter}")
     print(f"θa          {p.theta_a_deg:.2f}° from vertical ({p.theta_a_ccw_deg:.2f}° ccw)"
           + ("  (undefined: non-dilative → 0)" if p.branch == "non-dilative" else ""))

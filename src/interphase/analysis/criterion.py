@@ -269,3 +269,32 @@ def predict(model: CriterionModel, friction: float, theta_a_92: float, theta_a_9
                       efficiency=e, efficiency_interval=e_iv, tan_phi=tp, tan_delta=td, tan_delta_interval=td_iv,
                       delta_deg=deg(td), delta_interval_deg=(deg(td_iv[0]), deg(td_iv[1])), friction=friction,
                       notes=notes)
+
+
+@dataclass
+class ProfilePrediction:
+    """The chain run on a profile: the Prediction with the profile quantities that chose its branch."""
+    prediction: Prediction
+    theta_a_deg_92: float         # ψ, NaN when non-dilative
+    theta_a_deg_90: float
+    mean_slope_deg: float
+    flat_spaced: bool
+    flat_spacing_reason: str
+
+    def to_dict(self) -> dict:
+        return self.prediction.to_dict() | {
+            "flat_spaced": self.flat_spaced, "flat_spacing_reason": self.flat_spacing_reason,
+            "theta_a_deg_92": self.theta_a_deg_92, "theta_a_deg_90": self.theta_a_deg_90,
+            "mean_slope_deg": self.mean_slope_deg}
+
+
+def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
+                    filt: int | None = None) -> ProfilePrediction:
+    """Profile [m] → θa (both filters) → flat spacing → `predict`, for grains of median diameter
+    d50 [m] on a surface of particle–surface friction `friction` (tan φμ)."""
+    from interphase.surface.normals import theta_a_filters
+
+    t = theta_a_filters(profile, d50, (92, 90))
+    flat_spaced, why = regular_flat_spacing(profile.x, profile.z, d50)
+    p = predict(model, friction, t[92].theta_a_deg, t[90].theta_a_deg, flat_spaced, filt)
+    return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat_spaced, why)

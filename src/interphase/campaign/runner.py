@@ -206,6 +206,24 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
                 "message": data["message"], "elapsed": data["elapsed"]}
 
 
+def run_single(case: Case, engine_name: str, folder: str | os.PathLike) -> dict:
+    """One case outside a campaign (`campaign run-case`): `run_case` in `folder`, whose result dict
+    also carries the summary row (read back from summary.json when the folder had already finished).
+
+    A folder that exists, is not empty and holds no case.json is refused: the runner clears an
+    unfinished case folder before it starts, and a user's folder is not one."""
+    from interphase.errors import InputError
+
+    folder = Path(folder)
+    if folder.is_dir() and any(folder.iterdir()) and not (folder / st.CASE_JSON).exists():
+        raise InputError(f"{str(folder)!r} is not empty and is not a case folder", where="-o",
+                         fix="give a new or empty folder (an unfinished case folder is cleared before the run)")
+    result = run_case(case, engine_name, folder)
+    if result["status"] == "done" and "summary" not in result:
+        result["summary"] = st.read_json(folder / st.SUMMARY_JSON)["row"]
+    return result
+
+
 def st_tail(folder: Path) -> str:
     from interphase.engines.base import log_tail
 

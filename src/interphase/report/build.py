@@ -283,3 +283,16 @@ def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel
     campaign, store, summ = open_campaign(campaign_path)
     store.close()
     return CriterionModel.from_points(prepare_points(summ), f"campaign {campaign.name}", n_boot=n_boot)
+
+
+def criterion_model(friction: float, fit: str | Path | None = None, tan_phi: float | None = None) -> CriterionModel:
+    """The model `campaign predict` runs: fitted on the campaign file `fit`, else the study defaults
+    for `friction`; `tan_phi` (> 0) replaces the campaign's (or the defaults') tan φ."""
+    if fit is None:
+        return CriterionModel.study_defaults(friction, tan_phi)
+    model = fitted_model(fit)
+    if tan_phi is not None:
+        model.tan_phi = tan_phi
+    if not math.isfinite(model.tan_phi):
+        raise InputError("the campaign has no finished box test, so no tan φ", where="--fit", fix="give --tan-phi")
+    return model

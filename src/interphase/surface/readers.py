@@ -150,3 +150,12 @@ def prepare_measured(profile: Profile, cutoff: float | None = None) -> Profile:
     if cutoff is not None:
         out = gaussian_filter(out, cutoff)
     return out
+
+
+def load_profile(path: str | Path, units: str | None = None, cutoff: float | None = None) -> Profile:
+    """A measured profile file ready for the centroid trace: read (`units` m | mm | um, default the
+    file's own for a Dektak export, else mm), centerline-corrected and, with `cutoff` [m],
+    Gaussian-filtered. Unknown units are refused before the file is read."""
+    if units is not None:
+        units_factor(units)
+    return prepare_measured(read_profile(path, units=units), cutoff)
