@@ -41,8 +41,9 @@ run: deps
 	$(VENV)/bin/campaign run campaigns/quick.toml
 	$(VENV)/bin/campaign report campaigns/quick.toml
 
+# each benchmark prints its own Markdown table for BENCHMARKS.md
 bench: deps
-	$(PY) bench/run_all.py
+	@for f in bench/bench_*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

@@ -1,30 +1,20 @@
-"""Shared fixtures. Paths to ../shared (the steering repo's data) and tests/data."""
+"""Shared fixtures: tests/data, engine binaries, a real quick campaign."""
 
 from __future__ import annotations
 
-import os
 import shutil
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("INTERPHASE_SHARED", ROOT.parent / "shared"))
 DATA = ROOT / "tests" / "data"
 
 
 @pytest.fixture(scope="session")
-def shared_dir() -> Path:
-    return SHARED
-
-
-@pytest.fixture(scope="session")
 def dektak_csv() -> Path:
-    """The real stylus-profilometer export; shipped copy in tests/data if ../shared is absent."""
-    for p in (DATA / "dektak-1.csv", SHARED / "data" / "profiles" / "dektak-1.csv"):
-        if p.exists():
-            return p
-    pytest.fail("dektak-1.csv not found in tests/data or ../shared/data/profiles")
+    """The real stylus-profilometer export (tests/data/README.md)."""
+    return DATA / "dektak-1.csv"
 
 
 def need_binary(name: str) -> str:

@@ -2,6 +2,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from interphase.errors import InputError
 from interphase.report.synthetic import synthetic_summaries
 from interphase.surface.profiles import sawtooth
 
-DEKTAK = "/work/shared/data/profiles/dektak-1.csv"
+DEKTAK = str(Path(__file__).parent / "data" / "dektak-1.csv")
 
 
 def _run(capsys, *argv):

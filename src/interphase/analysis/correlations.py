@@ -177,14 +177,6 @@ class BilinearFit:
         a = (1 - self.level) / 2
         return (float(np.quantile(vals, a)), float(np.quantile(vals, 1 - a)))
 
-    def equation(self, x: str = "x", digits: int = 3) -> str:
-        f = lambda v: f"{v:.{digits}g}"
-        if self.model == "hinge":
-            b0, b1, b2 = self.coef
-            return f"y = {f(b0)} + {f(b1)}·{x} + {f(b2)}·({x} − {f(self.c)})₊"
-        b0, b1 = self.coef
-        return f"y = {f(b0)} + {f(b1)}·min({x}, {f(self.c)})"
-
     def to_dict(self) -> dict:
         d = {"model": self.model, "c": self.c, "c_lo_profile": self.c_interval_profile[0],
              "c_hi_profile": self.c_interval_profile[1], "c_lo_boot": self.c_interval_bootstrap[0],
@@ -331,9 +323,6 @@ STUDY: tuple[CorrelationSpec, ...] = (
                     "Peak efficiency vs θr at the surface", "θr, surface [° from vertical]", "efficiency E = tan δ / tan φ [-]"),
 )
 SPECS = {s.key: s for s in STUDY}
-
-POINT_COLUMNS = ("case_id", "group", "label", "friction_ps", "gradation", "profile_kind", "flat_spaced",
-                 "tan_phi", "efficiency", "theta_a_ccw_deg_90", "theta_r_over_theta_a", "non_dilative")
 
 
 def _col(df, name, default=math.nan):

@@ -81,19 +81,6 @@ def load_balanced(history: pd.DataFrame, tolerance: float | None = MAX_LOAD_MISM
         return np.abs(nfz - nf) <= tolerance * nf
 
 
-def contact_stress_ratio(contacts: pd.DataFrame) -> pd.Series:
-    """μs per snapshot from the 'ps' contacts: ΣFx/Σ(−Fz) with F = −f the force on the surface.
-    (Dumped tangential forces of sliding contacts include damping, docs/engines.md: prefer History.)"""
-    require_columns(contacts, ("snapshot", "kind", "fx", "fz"))
-    ps = contacts[contacts["kind"].eq("ps").to_numpy()]
-    sums = ps.groupby("snapshot")[["fx", "fz"]].sum()
-    snaps = np.unique(contacts["snapshot"].to_numpy())
-    sums = sums.reindex(snaps)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.where(sums["fz"] > 0, -sums["fx"] / sums["fz"], np.nan)
-    return pd.Series(ratio, index=pd.Index(snaps, name="snapshot"), name="stress_ratio")
-
-
 def moving_average(x, y, window: float) -> np.ndarray:
     """Centred moving average of y over |x' − x| ≤ window/2 (x [m], sorted ascending), NaNs
     skipped; window ≤ 0 returns y. O(N) with cumulative sums."""
@@ -165,16 +152,6 @@ def dilation(history: pd.DataFrame, at_disp: float) -> float:
     order = np.argsort(s, kind="stable")
     k = order[int(np.nanargmin(np.abs(s[order] - at_disp)))]
     return float(z[k] - z[order[0]])
-
-
-def tan_delta(history: pd.DataFrame, window: float) -> Peak:
-    """Interface: the peak of μs(t) from History (tan δ = Peak.value)."""
-    return find_peak(history["shear_disp"], surface_stress_ratio(history), window)
-
-
-def tan_phi_box(history: pd.DataFrame, window: float) -> Peak:
-    """Direct shear box: the peak of τ/σ on the shear plane (tan φ = Peak.value)."""
-    return find_peak(history["shear_disp"], box_stress_ratio(history), window)
 
 
 def efficiency(tan_delta_value, tan_phi_value):

@@ -243,7 +243,6 @@ class SlurmExecutor:
         if not tasks:
             return
         import submitit
-        from submitit.core.utils import UncompletedJobError
 
         subfolder = self.root / ".submitit"
         known = self._load_jobs()
@@ -296,7 +295,7 @@ class SlurmExecutor:
                         since = interrupted_at.setdefault(cid, time.monotonic())
                         if time.monotonic() - since < SLURM_VERDICT_WAIT:
                             continue
-                    on_event("finished", cid, self._collect(job, t, state, UncompletedJobError))
+                    on_event("finished", cid, self._collect(job, t, state))
                     del active[cid]
         except (KeyboardInterrupt, Interrupted):
             for cid, (job, t) in active.items():
@@ -309,7 +308,7 @@ class SlurmExecutor:
                 on_event("finished", cid, interrupted_result(cid, f"SLURM job {job.job_id} cancelled"))
             raise
 
-    def _collect(self, job, task: Task, state: str, uncompleted) -> dict:
+    def _collect(self, job, task: Task, state: str) -> dict:
         """The case's verdict: the runner's (from the folder) if it gave one, else SLURM's cause of death."""
         cid = task.case_id
         result = None

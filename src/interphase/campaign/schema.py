@@ -423,7 +423,7 @@ def _factors(ctx: _Ctx, sweep: dict, zips: list, gpath: tuple):
             raise ctx.error(where, "empty sweep: no value to run", "give at least one value, or remove the key")
         factors.append([[(name, v, where)] for v in values])
         variables.append(name)
-    for zi, z in enumerate(zips):
+    for z in zips:
         zp = (gpath + ("zip",) if gpath else ("zip",))
         if not isinstance(z, dict):
             raise ctx.error(zp, "must be a table of equal-length lists")

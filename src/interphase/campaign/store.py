@@ -196,9 +196,6 @@ class CampaignStore:
     def case_folder(self, case_id: str) -> Path:
         return self.root / case_id
 
-    def is_done(self, case_id: str) -> bool:
-        return (self.root / case_id / DONE).exists()
-
     def folder_ids(self) -> list[str]:
         return sorted(p.name for p in self.root.iterdir() if p.is_dir() and (p / CASE_JSON).exists())
 
