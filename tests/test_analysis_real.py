@@ -70,6 +70,19 @@ def test_stress_force_fabric_matches_average_stress(summary):
     assert rel.median() <= 0.10 and rel.max() <= 0.20, rel.round(3).tolist()
 
 
-def test_summed_surface_force_angle_is_atan_of_contact_ratio(row):
+def test_summed_surface_force_angle_against_the_dumps_and_the_engine(row):
+    """ψF at the peak snapshot: from the raw dump rows of the window's grains (selected here, not by
+    the summary), and against the engine's own mesh force on the window at the same step (History),
+    an independent measurement: within 0.5° (the dumps' damping term, docs/liggghts.md)."""
+    import numpy as np
+
+    case, res = real_case_and_results()
+    c, h = res.contacts, res.history
+    x0, x1 = case.window
+    ps = c[(c.kind == "ps") & (c.snapshot == row["peak_snapshot"]) & c.x2.between(x0, x1)]
+    assert len(ps) == row["n_contacts_surface"] > 10
     assert row["surface_force_angle_deg"] == pytest.approx(
-        math.degrees(math.atan(row["stress_ratio_surface_contacts"])), abs=1e-9)
+        math.degrees(math.atan2(-ps.fx.sum(), ps.fz.sum())), abs=1e-9)
+    k = int(np.argmin(np.abs(h.shear_disp.to_numpy() - row["peak_snapshot_shear_disp"])))
+    engine = math.degrees(math.atan(h.window_fx.iloc[k] / -h.window_fz.iloc[k]))
+    assert row["surface_force_angle_deg"] == pytest.approx(engine, abs=0.5)

@@ -149,7 +149,9 @@ def test_sign_check_resisting_surface():
     F_x, F_z = -c["fx"].sum(), -c["fz"].sum()            # force on the surface
     assert s["stress_ratio"] == pytest.approx(F_x / -F_z, rel=1e-12)
     assert s["stress_ratio"] > 0
-    assert s["force_angle_deg"] == pytest.approx(math.degrees(math.atan(s["stress_ratio"])), abs=1e-10)
+    # ψF from the contact forces as given (f = fn·n + ft·t), not from the function's own sums
+    gx, gz = np.sum(fn * nx - ft * nz), np.sum(fn * nz + ft * nx)
+    assert s["force_angle_deg"] == pytest.approx(math.degrees(math.atan2(-gx, gz)), abs=1e-10)
     # the same contacts written with the surface moving +x: mirrored tables, shear_sign = −1
     m = apply_shear_sign(c, -1)
     assert surface_anisotropy(m).iloc[0]["theta_r_deg"] < 0

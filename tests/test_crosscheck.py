@@ -96,15 +96,22 @@ def test_seed_means_use_seeds_both_engines_finished():
 
 
 @pytest.fixture(scope="module")
-def tiny_campaign(tmp_path_factory):
-    need_binary("liggghts")
-    need_binary("yade")
+def xc_file(tmp_path_factory):
     folder = tmp_path_factory.mktemp("xc")
     path = folder / "xc.toml"
     path.write_text(CAMPAIGN)
     return path, folder / "out"
 
 
+@pytest.fixture(scope="module")
+def tiny_campaign(xc_file):
+    need_binary("liggghts")
+    need_binary("yade")
+    return xc_file
+
+
+@pytest.mark.liggghts
+@pytest.mark.yade
 def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
     """Both engines run; on a flat surface at μs = 0.2 they agree on the stress ratio within 10 %,
     and the table and files name both engines' values."""
@@ -126,13 +133,13 @@ def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
     assert {r["metric"] for r in data["rows"]} >= {"peak_stress_ratio", "theta_r_surface_deg"}
 
 
-def test_a_crosscheck_file_is_a_campaign_too(tiny_campaign):
+def test_a_crosscheck_file_is_a_campaign_too(xc_file):
     """`campaign run` reads a cross-check file as it is: the schema skips [crosscheck], whose
     tolerances only `campaign crosscheck` reads (and validates)."""
     from interphase.campaign.crosscheck import load
     from interphase.campaign.schema import load_campaign
 
-    path, _ = tiny_campaign
+    path, _ = xc_file
     plain = load_campaign(path)
     campaign, tol, readable, _ = load(path)
     assert readable == path
