@@ -28,8 +28,8 @@ from interphase.campaign.run import run_campaign
 from interphase.campaign.runner import run_case
 from interphase.campaign.schema import load_campaign
 from interphase.campaign.store import CampaignStore
-from interphase.engines.base import Engine, EngineProfile, Results
-from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS
+from interphase.engines.base import Engine, EngineProfile
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, Results
 
 BIG = """
 [campaign]
@@ -104,7 +104,13 @@ class StandIn(Engine):
     def render(self, case):
         return {"in.deck": "# stand-in\n"}
 
-    def execute(self, folder):
+    def arguments(self, binary):
+        return [binary]
+
+    def diagnose(self, folder, returncode):
+        return (None, "") if returncode == 0 else ("engine_error", f"return code {returncode}")
+
+    def execute(self, folder):          # no recipe.json to estimate a timeout from
         subprocess.run(["true"], cwd=folder, check=True)
 
     def read_results(self, folder):

@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 from interphase.case import Case
+from interphase.engines.device import device
 from interphase.engines.liggghts import Liggghts
 from interphase.engines.yade import Yade
 from interphase.surface.spec import ProfileSpec
@@ -64,7 +65,7 @@ def main(n: int = 1000):
         t_lig = time.perf_counter() - t0
         lrate = liggghts_rate(fl / "log.liggghts", grains)
     driver = t_render + t_read
-    print(f"grains {grains}, dt {yade.parameters(case)['dt']:.3e} s, YADE threads {yade.profile.threads}")
+    print(f"grains {grains}, dt {device(case).dt:.3e} s, YADE threads {yade.profile.threads}")
     print(f"YADE shear stage {shear:.3e} particle-steps/s (consolidation {cons:.3e}); "
           f"LIGGGHTS shear stage {lrate:.3e}; YADE/LIGGGHTS {shear / lrate:.2f}")
     print(f"YADE case wall time {t_run + driver:.1f} s (engine {t_run:.1f} s, render {t_render:.2f} s, "

@@ -249,8 +249,10 @@ def test_platen_holds_the_normal_stress_during_shear(run):
 
 def test_hostile_value_in_the_deck_is_refused(engine):
     """A name carrying a newline and a `shell` command, or a NaN, stops the real template."""
+    from interphase.engines.device import device
+    from interphase.engines.liggghts import deck_values
     from interphase.engines.render import environment
-    p = engine.parameters(tiny())["params"]
+    p = deck_values(device(tiny()))
     tpl = environment(engine.templates).get_template("interface_shear.in.j2")
     assert "fix surf" in tpl.render(**p)
     with pytest.raises(InputError):
@@ -340,7 +342,7 @@ def test_unreadable_stl_is_an_engine_error(engine, tmp_path):
 def test_render_is_data_and_deterministic(engine):
     a, b = engine.render(tiny()), engine.render(tiny())
     assert a == b
-    assert set(a) >= {"in.deck", "grains.data", "surface.stl", "sides.stl", "platen.stl", "engine.json"}
+    assert set(a) >= {"in.deck", "grains.data", "surface.stl", "sides.stl", "platen.stl", "engine.json", "recipe.json"}
     assert "rolling_friction epsd2" in a["in.deck"] and "setforce NULL 0.0 NULL" in a["in.deck"]
 
 
@@ -361,9 +363,10 @@ def test_grains_leaving_under_a_side_wall_are_removed_not_lost(run):
 def test_grain_balance_names_a_leak(tmp_path):
     """check_grain_balance reads balance.txt: grains + removed < placed is a leak (the deck's
     `thermo_modify lost warn` would otherwise hide it)."""
+    from interphase.engines.device import device
     from interphase.engines.liggghts import check_grain_balance
 
-    (tmp_path / "engine.json").write_text('{"n_grains": 200}')
+    (tmp_path / "recipe.json").write_text(device(tiny()).record("liggghts").to_json())   # 200 grains
     head = "step n_grains n_removed\n"
     (tmp_path / "balance.txt").write_text(head + "0 200 0\n100 200 1\n200 199 1\n")
     assert check_grain_balance(tmp_path) is None

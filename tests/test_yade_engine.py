@@ -172,7 +172,7 @@ def test_parquet_files_written(yrun, tmp_path):
 
 def test_render_is_data_and_the_script_carries_no_values(yade_engine):
     a, b = yade_engine.render(tiny(friction_ps=0.2)), yade_engine.render(tiny(friction_ps=0.5, seed=7))
-    assert set(a) == {"driver.py", "params.json"}
+    assert set(a) == {"driver.py", "params.json", "recipe.json"}
     assert a["driver.py"] == b["driver.py"]              # values live only in params.json
     assert a["params.json"] != b["params.json"]
     p = json.loads(a["params.json"])

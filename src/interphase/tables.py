@@ -17,6 +17,8 @@ strength analysis uses; normal_force: platen force [N]; platen_z [m].
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import pandas as pd
 
 CONTACT_COLUMNS = (
@@ -30,6 +32,15 @@ HISTORY_COLUMNS = (
 )
 PARTICLE_COLUMNS = ("snapshot", "time", "shear_disp", "id", "x", "z", "vx", "vz", "radius")
 CONTACT_KINDS = ("pp", "ps", "pw")
+
+
+@dataclass
+class Results:
+    """What an engine reader returns for one finished run: the three tables above."""
+
+    contacts: pd.DataFrame                  # CONTACT_COLUMNS
+    history: pd.DataFrame                   # HISTORY_COLUMNS
+    particles: pd.DataFrame | None = None   # PARTICLE_COLUMNS
 
 
 class MissingColumnError(ValueError):

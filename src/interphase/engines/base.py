@@ -5,7 +5,10 @@ results, plus a profile that knows how this machine launches the binary.
     engine.execute(folder)                     # subprocess, cwd=folder, logs to files; EngineError
     results = engine.read_results(folder)      # Results(contacts, history) in the analysis frame
 
-`render(case)` returns the same file map without touching the disk (dry runs, golden tests).
+`render(case)` returns the same file map without touching the disk (dry runs, golden tests). An
+engine serialises the case's device (engines/device.py) in its own formats and writes recipe.json
+(interphase.recipe) beside them; everything else it keeps is what is truly its own: its command
+line, the output files it must leave, its log classifier and the pattern of its version banner.
 """
 
 from __future__ import annotations
@@ -16,12 +19,20 @@ import functools
 import hashlib
 import inspect
 import os
+import re
+import shlex
+import shutil
+import signal
+import subprocess
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pandas as pd
-
+from interphase import recipe as recipe_module
 from interphase.case import Case
+from interphase.errors import InputError
+from interphase.recipe import read_record
+from interphase.tables import Results
 
 #: classified causes of an engine failure
 CAUSES = ("lost_atoms", "not_consolidated", "bad_mesh", "timeout", "killed", "engine_error", "missing_output",
@@ -51,28 +62,51 @@ class EngineError(RuntimeError):
                 "log_tail": self.log_tail}
 
 
-@dataclass
-class Results:
-    contacts: pd.DataFrame   # interphase.tables.CONTACT_COLUMNS
-    history: pd.DataFrame    # interphase.tables.HISTORY_COLUMNS
-    particles: pd.DataFrame | None = None  # interphase.tables.PARTICLE_COLUMNS
-
-
 @dataclass(frozen=True)
 class EngineProfile:
     """How this machine launches an engine binary. Read from env, never from templates.
 
-    `launcher` is a prefix such as ("mpirun", "-np", "2"); `threads` sets OMP_NUM_THREADS."""
+    `launcher` is a prefix such as ("mpirun", "-np", "2"); `threads` sets OMP_NUM_THREADS (and
+    YADE's -j); `env` adds environment variables; `version`, when given, is used instead of asking
+    the binary (a machine where the binary cannot be probed, e.g. behind a launcher)."""
 
     binary: str
     launcher: tuple[str, ...] = ()
     threads: int = 1
-    timeout: float | None = None   # seconds; None: the engine's estimate from the case
+    timeout: float | None = None   # seconds; None: the estimate from the case's recipe.json
     env: tuple[tuple[str, str], ...] = field(default=())
+    version: str | None = None
+
+    @classmethod
+    def from_env(cls, engine: str) -> "EngineProfile":
+        """INTERPHASE_<ENGINE>_BINARY (default: the engine's name), _LAUNCHER (split as a shell
+        would), _THREADS (an integer, default 1) and _TIMEOUT (seconds, default: estimated)."""
+        prefix = f"INTERPHASE_{engine.upper()}_"
+        threads = os.environ.get(prefix + "THREADS", "1")
+        try:
+            n = int(threads)
+        except ValueError:
+            raise InputError(f"{prefix}THREADS={threads!r} is not an integer", where="environment",
+                             fix=f"set {prefix}THREADS to a thread count such as 1 or 2") from None
+        timeout = os.environ.get(prefix + "TIMEOUT")
+        return cls(binary=os.environ.get(prefix + "BINARY", engine),
+                   launcher=tuple(shlex.split(os.environ.get(prefix + "LAUNCHER", ""))), threads=n,
+                   timeout=float(timeout) if timeout is not None else None)
+
+
+#: the modules, besides an engine's own, whose code decides what a case folder holds
+RECIPE_MODULES = ("engines/device.py", "engines/packing.py", "engines/render.py", "recipe.py")
 
 
 class Engine(abc.ABC):
     name: str = ""
+    label: str = ""                      # the engine's name in messages ("LIGGGHTS")
+    outputs: tuple[str, ...] = ()        # files a finished run must leave in its folder
+    version_args: tuple[str, ...] = ("--version",)
+    version_pattern: str = ""            # regex whose group 1 is the version in the binary's output
+    version_format: str = "{}"
+    template_suffix: str = ""            # of the templates interface_shear<suffix>, direct_shear<suffix>
+    recipe_modules: tuple[str, ...] = RECIPE_MODULES   # paths below the package
 
     def __init__(self, profile: EngineProfile | None = None, templates: str | os.PathLike | None = None):
         self.profile = profile or self.default_profile()
@@ -80,34 +114,46 @@ class Engine(abc.ABC):
 
     # -- machine side
     @classmethod
-    @abc.abstractmethod
-    def default_profile(cls) -> EngineProfile: ...
+    def default_profile(cls) -> EngineProfile:
+        return EngineProfile.from_env(cls.name)
 
-    @abc.abstractmethod
     def version(self) -> str:
-        """Engine version string (part of every case id)."""
+        """Engine version string (part of every case id): the profile's, else from the binary's
+        banner ('not-installed', 'unknown' when it cannot be read)."""
+        if self.profile.version:
+            return self.profile.version
+        path = shutil.which(self.profile.binary)
+        if path is None:
+            return "not-installed"
+        out = _banner(path, self.version_args)
+        m = re.search(self.version_pattern, out) if out is not None else None
+        return self.version_format.format(m.group(1).strip()) if m else "unknown"
 
     def template_hash(self) -> str:
         """SHA-256 (short) of the recipe: every template file of this engine (names included) and the
-        code of the Python modules that compute the templates' values (the engine's module and
-        engines/device.py, render.py), so that a change of physics made in Python (a rolling
-        model, a wall height) changes every case id as a template edit does. Code is hashed as its
-        syntax tree without docstrings: comments, layout and docstrings do not count."""
+        code of the Python modules that decide the case folder's content (the engine's module and
+        `recipe_modules`: device, packing, rendering, the Recipe; YADE adds its driver), so that a
+        change of physics made in Python (a rolling model, a wall height) changes every case id as
+        a template edit does. Code is hashed as its syntax tree without docstrings: comments,
+        layout and docstrings do not count."""
         h = hashlib.sha256()
         for p in sorted(self.templates.rglob("*")):
             if p.is_file():
                 h.update(p.relative_to(self.templates).as_posix().encode())
                 h.update(p.read_bytes())
-        here = Path(__file__).parent
-        for src in (Path(inspect.getsourcefile(type(self))), here / "device.py", here / "render.py"):
+        package = Path(recipe_module.__file__).parent
+        for src in (Path(inspect.getsourcefile(type(self))), *(package / m for m in self.recipe_modules)):
             h.update(src.name.encode())
             h.update(code_digest(src).encode())
         return h.hexdigest()[:16]
 
     # -- the contract
+    def template_name(self, case: Case) -> str:
+        return ("interface_shear" if case.test == "interface" else "direct_shear") + self.template_suffix
+
     @abc.abstractmethod
     def render(self, case: Case) -> dict[str, str | bytes]:
-        """Every input file of the case as data: {relative path: content}."""
+        """Every input file of the case as data: {relative path: content}, recipe.json included."""
 
     def write_input(self, case: Case, folder: str | os.PathLike) -> dict[str, str | bytes]:
         folder = Path(folder)
@@ -123,12 +169,64 @@ class Engine(abc.ABC):
         return files
 
     @abc.abstractmethod
+    def arguments(self, binary: str) -> list[str]:
+        """The command line after the profile's launcher, `binary` resolved on PATH."""
+
+    def command(self) -> list[str]:
+        binary = shutil.which(self.profile.binary) or self.profile.binary
+        return [*self.profile.launcher, *self.arguments(binary)]
+
+    def environment(self) -> dict[str, str]:
+        """The run's environment: this process's, the profile's additions, OMP_NUM_THREADS."""
+        return dict(os.environ, **dict(self.profile.env), OMP_NUM_THREADS=str(self.profile.threads))
+
+    @abc.abstractmethod
+    def diagnose(self, folder: Path, returncode: int) -> tuple[str | None, str]:
+        """(cause, message) of a run that ended with `returncode`, from its log and files; cause
+        None if it succeeded."""
+
+    def timeout_for(self, folder: str | os.PathLike) -> float:
+        """The profile's time limit, else recipe.json's estimate: timeout_base + timeout_factor ×
+        the most steps the run can take × grains / the engine's assumed throughput [s]."""
+        if self.profile.timeout is not None:
+            return self.profile.timeout
+        rec = read_record(folder)
+        r = rec.recipe
+        return r.timeout_base + r.timeout_factor * rec.steps.most * rec.n_grains / r.throughput(self.name)
+
     def execute(self, folder: str | os.PathLike) -> None:
-        """Run the engine with cwd = folder; raise EngineError on failure."""
+        """Run the engine with cwd = folder; raise EngineError on failure (not_installed, timeout,
+        the causes `diagnose` finds, missing_output)."""
+        folder = Path(folder)
+        cmd = self.command()
+        if shutil.which(self.profile.binary) is None:
+            raise EngineError("not_installed", f"{self.label} binary {self.profile.binary!r} not found",
+                              command=cmd, folder=folder)
+        rc = run_logged(cmd, folder, self.environment(), self.timeout_for(folder), self.label)
+        log = folder / "engine.log"
+        cause, message = self.diagnose(folder, rc)
+        if cause:
+            raise EngineError(cause, message, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
+        for name in self.outputs:
+            if not (folder / name).exists():
+                raise EngineError("missing_output", f"{self.label} finished without writing {name}", command=cmd,
+                                  returncode=rc, log_tail=log_tail(log), folder=folder)
 
     @abc.abstractmethod
     def read_results(self, folder: str | os.PathLike) -> Results:
         """ContactTable + History of a finished run, in the analysis frame."""
+
+
+@functools.lru_cache(maxsize=None)
+def _banner(path: str, args: tuple[str, ...]) -> str | None:
+    """stdout of `path *args`, run in a scratch folder (LIGGGHTS writes log.liggghts into its cwd);
+    None if it could not run. Cached per binary."""
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            return subprocess.run([path, *args], capture_output=True, text=True, timeout=60, cwd=tmp,
+                                  stdin=subprocess.DEVNULL).stdout
+    except (OSError, subprocess.TimeoutExpired):
+        return None
 
 
 def template_root() -> Path:
@@ -142,8 +240,6 @@ def template_root() -> Path:
 def not_consolidated(text: str) -> str | None:
     """The 'NOT CONSOLIDATED: …' line both engines' drivers print when the consolidation loop ran
     out with the platen force outside its band (engines.device; the shear was skipped), else None."""
-    import re
-
     m = re.search(r"^NOT CONSOLIDATED: [^\n]*", text, re.MULTILINE)
     return m.group(0) if m else None
 
@@ -178,7 +274,6 @@ def get_engine(name: str, **kwargs) -> Engine:
         except ModuleNotFoundError:
             pass
     if name not in _REGISTRY:
-        from interphase.errors import InputError
         raise InputError(f"unknown engine {name!r}", where="engine", fix="use liggghts or yade")
     return _REGISTRY[name](**kwargs)
 
@@ -187,9 +282,6 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
     """Run an engine: cwd = folder (never chdir), stdout + stderr to folder/engine.log, in its own
     session so that a timeout or an interruption kills the whole process group. Returns the return
     code; a timeout raises EngineError('timeout') with the log tail."""
-    import signal
-    import subprocess
-
     log = Path(folder) / "engine.log"
     with open(log, "wb") as out:
         proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
@@ -205,15 +297,6 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
             raise
-
-
-def steps_for(duration: float, dt: float, multiple: int = 1) -> int:
-    """Time steps covering `duration` [s] at step `dt` [s], rounded up to a multiple of `multiple`
-    (decks align stage boundaries with the snapshot interval so dumps fall on them)."""
-    import math
-
-    n = max(1, int(math.ceil(duration / dt)))
-    return -(-n // multiple) * multiple
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,17 +1,169 @@
-"""The soil box of the interface test, shared by both engines so that they shear the same device.
+"""The test device of a Case, engine-neutral: walls, platen, grains, bounds, clock and step counts.
 
-Frame: x = shear axis, z up; lengths in metres.
+`device(case)` computes it once; LIGGGHTS (engines/liggghts.py) and YADE (engines/yade.py) only
+write it in their own formats, so the cross-check compares two engines on one device.
+
+Frame: x = shear axis, z up into the soil, y out of plane (grain centres at y = 0); lengths m,
+forces N, times s. Walls are segments (x0, z0, x1, z1): their normal is the direction of travel
+turned +90° (left of it), which faces the soil. The moving wall group travels −x at the shear
+velocity, so the soil moves +x relative to it (shear_sign = +1: the engine frame is the analysis
+frame).
+  interface: the rough surface (the profile, shifted to start `margin` before x = 0 and long
+    enough for the whole shear) under the soil box [0, L] between two fixed side walls whose
+    bottoms sit above the surface's highest point (`side_walls`); grains whose centres cross the
+    exit planes x = 0 or x = L have left the box and are removed.
+  box: a direct shear box of height H split at H/2; the lower half (bottom, sides, right flange)
+    moves, the upper half (sides, left flange) is fixed; the flanges close the openings the
+    slide uncovers.
+A servo platen holds σ·L·t on top of the soil (t = D50, the quasi-2D thickness).
 """
 
 from __future__ import annotations
 
+import functools
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-# consolidation under the servo platen, the same protocol in both engines: a first stretch, then
-# chunks of a quarter of it until the platen force lies within the tolerance of its target
-CONSOLIDATION_TIME = 0.02   # [s] the first stretch
-CONSOLIDATION_CHUNKS = 40   # at most this many chunks, then the case fails as 'not_consolidated'
-PLATEN_TOLERANCE = 0.03     # consolidation ends when |F_platen − F_target| < this × F_target
+from interphase.case import Case
+from interphase.engines.packing import Packing, lattice_packing
+from interphase.material import rayleigh_time
+from interphase.recipe import RECIPE, Recipe, RunRecord, Steps
+from interphase.surface.profiles import from_spec
+
+Segment = tuple[float, float, float, float]
+
+# read by campaign/plan.py's run-time estimate
+CONSOLIDATION_TIME = RECIPE.consolidation_time
+
+
+@dataclass(frozen=True, eq=False)
+class Device:
+    """Everything both engines build a run from (see the module docstring for the frame)."""
+
+    case: Case
+    recipe: Recipe
+    dt: float                          # time step [s]
+    skin: float                        # neighbour-list skin [m]
+    wall_reach: float                  # walls span |y| ≤ this [m], beyond any grain
+    moving: tuple[Segment, ...]        # the moving wall group (interface: the surface's segments)
+    fixed: tuple[Segment, ...]         # interface: side walls; box: the upper half
+    exits: tuple[Segment, ...] | None  # interface: the planes x = 0 and x = L, full height
+    platen: Segment
+    platen_com: tuple[float, float]    # (x, z) of the platen's centre [m]
+    platen_force: float                # target [N], σ·L·t
+    bounds: tuple[float, float, float, float]   # (x_lo, x_hi, z_lo, z_hi): a grain outside is lost
+    window: tuple[float, float, float] | None   # (x0, x1, z_top) measuring window; box: None
+    packing: Packing
+    steps: Steps
+
+    shear_sign = 1
+
+    @property
+    def test(self) -> str:
+        return self.case.test
+
+    @property
+    def wall_names(self) -> tuple[str, str]:
+        """Names of the moving and the fixed wall group."""
+        return ("surface", "sides") if self.test == "interface" else ("lower", "upper")
+
+    @property
+    def thickness(self) -> float:
+        return self.case.thickness
+
+    @property
+    def n_grains(self) -> int:
+        return self.packing.n
+
+    @property
+    def platen_band(self) -> tuple[float, float]:
+        """Consolidation ends once the platen force lies strictly between these [N]."""
+        tol = self.recipe.platen_tolerance
+        return (1 - tol) * self.platen_force, (1 + tol) * self.platen_force
+
+    @property
+    def platen_speed_limit(self) -> float:
+        """The fastest the platen may move [m/s]: half a skin per two steps, so that no contact
+        is missed between neighbour-list builds (LIGGGHTS refuses vel_max ≥ skin/(2·dt))."""
+        return 0.5 * self.skin / (2 * self.dt)
+
+    def record(self, engine: str) -> RunRecord:
+        """What recipe.json states about a run of this device by `engine`."""
+        return RunRecord(engine=engine, test=self.test, dt=self.dt, shear_velocity=self.case.shear_velocity,
+                         shear_sign=self.shear_sign, thickness=self.thickness, n_grains=self.n_grains,
+                         platen_force=self.platen_force, window=self.window, steps=self.steps, recipe=self.recipe)
+
+
+def time_step(case: Case, recipe: Recipe = RECIPE) -> float:
+    """dt = time_step_fraction × Rayleigh time of the smallest grain [s]."""
+    return recipe.time_step_fraction * rayleigh_time(case.gradation.d_min / 2, case.density, case.shear_modulus,
+                                                     case.poisson)
+
+
+def steps_for(duration: float, dt: float, multiple: int = 1) -> int:
+    """Time steps covering `duration` [s] at step `dt` [s], rounded up to a multiple of `multiple`."""
+    n = max(1, int(math.ceil(duration / dt)))
+    return -(-n // multiple) * multiple
+
+
+def step_counts(case: Case, dt: float, recipe: Recipe = RECIPE) -> Steps:
+    """The run's step counts. The snapshot interval is Case.snapshot_every of shear; the history
+    interval divides it (about history_points rows over the shear), and the consolidation stretch
+    and chunks are multiples of it, so the shear starts on a dump step."""
+    n_shear = steps_for(case.shear_distance / case.shear_velocity, dt)
+    n_snap = max(1, int(round(case.snapshot_every / case.shear_velocity / dt)))
+    k = max(1, round(n_snap / max(1, n_shear // recipe.history_points)))
+    n_history = max(1, n_snap // k)
+    n_snap = n_history * k
+    return Steps(n_consolidate=steps_for(recipe.consolidation_time, dt, n_snap),
+                 n_chunk=steps_for(recipe.chunk_time, dt, n_snap), n_chunks_max=recipe.consolidation_chunks,
+                 n_shear=n_shear, n_snapshot=n_snap, n_history=n_history)
+
+
+@functools.lru_cache(maxsize=8)
+def device(case: Case, recipe: Recipe = RECIPE) -> Device:
+    """The device of `case` (cached: both engines rendering one case share it; do not mutate its
+    arrays)."""
+    d_min, d_max = case.gradation.d_min, case.gradation.d_max
+    L, D = case.box_length, case.shear_distance
+    margin = 2 * d_max
+    dt = time_step(case, recipe)
+    if case.test == "interface":
+        prof = from_spec(case.profile, case.d50, L + D + 2 * margin)
+        x, z = prof.x - margin, prof.z            # the surface starts `margin` before the box
+        top = float(z.max())
+        pack = lattice_packing(case, 0.0, L, top + 0.02 * d_max)
+        wall_top = pack.top + 3 * d_max
+        z_lo = float(z.min()) - d_max
+        moving = tuple(zip(x[:-1].tolist(), z[:-1].tolist(), x[1:].tolist(), z[1:].tolist()))
+        fixed = tuple(tuple(s) for s in side_walls(prof, L, d_min, d_max, case.d50, wall_top))
+        exits = ((0.0, z_lo, 0.0, wall_top), (L, wall_top, L, z_lo))
+        x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max     # the surface travels −D
+        window = (*case.window, top + d_max)
+    else:
+        exits, window = None, None
+        z_mid = case.box_height / 2
+        gap = 0.05 * d_min
+        pack = lattice_packing(case, 0.0, L, 0.0)
+        wall_top = max(pack.top, case.box_height) + 3 * d_max
+        far = D + margin
+        moving = ((-far, 0.0, L + far, 0.0),                  # bottom
+                  (0.0, z_mid - gap, 0.0, 0.0),               # left side
+                  (L, 0.0, L, z_mid - gap),                   # right side
+                  (L + far, z_mid - gap, L, z_mid - gap))     # right flange (faces down)
+        fixed = ((0.0, wall_top, 0.0, z_mid), (L, z_mid, L, wall_top),
+                 (0.0, z_mid, -far, z_mid))                   # left flange (faces up)
+        z_lo = -d_max
+        x_lo, x_hi = -far - D - d_max, L + far + d_max
+    platen_z = pack.top + 0.5 * d_max
+    inset = 0.02 * d_max
+    return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=0.45 * d_max * 2,
+                  moving=moving, fixed=fixed, exits=exits,
+                  platen=(L - inset, platen_z, inset, platen_z), platen_com=(L / 2, platen_z),
+                  platen_force=case.normal_stress * L * case.thickness, bounds=(x_lo, x_hi, z_lo, wall_top + 2 * d_max),
+                  window=window, packing=pack, steps=step_counts(case, dt, recipe))
 
 
 def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:
@@ -25,10 +177,10 @@ def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:
     than the gap can leave too; they are removed at the side planes and counted (`grains_left`).
     Only when that gap would let a free grain of median size through (p + 0.05·d_min ≥ D50: flat or
     shallow valleys, where grains ride on the peaks instead of in the valleys) the edge sits
-    0.05·d_min above the peaks. The bound was d_min/2 until 2026-11-23: with well-graded grains
-    (d_min = D50/2) it shut the 45° saw-tooth's 0.57 mm gap, and the largest grains jammed at the
-    left wall in most seeds (max overlaps 0.31–0.63 D50, wall forces 7–20 N against a 2.9 N
-    platen; with the gap 0.09–0.28 D50 and 2–6 grains removed per run; docs/liggghts.md)."""
+    0.05·d_min above the peaks. A tighter bound (d_min/2) shut the 45° saw-tooth's 0.57 mm gap for
+    well-graded grains (d_min = D50/2), and the largest grains jammed at the left wall in most seeds
+    (max overlaps 0.31–0.63 D50, wall forces 7–20 N against a 2.9 N platen; with the gap
+    0.09–0.28 D50 and 2–6 grains removed per run; docs/liggghts.md)."""
     from interphase.surface.trace import centroid_trace
 
     tr = centroid_trace(profile, d_max, dx=d_max / 1000)   # p to ~1e-3·d_max; the default step cost 0.15 s

@@ -3,19 +3,18 @@
 Dumps are split into ITEM blocks with one regular-expression pass over the file; the rows of all
 blocks are parsed in one bulk pass and their columns looked up by the header names
 (`ITEM: ENTRIES c_pc[1] …`, `ITEM: ATOMS id x z …`). Column meaning of compute pair/gran/local and
-wall/gran/local (fixed order in LIGGGHTS 3.8.0, ENGINES.md): pairs 1-3 centre i, 4-6 centre j,
+wall/gran/local (fixed order in LIGGGHTS 3.8.0, docs/engines.md): pairs 1-3 centre i, 4-6 centre j,
 7-9 id i, id j, periodic flag, 10-12 force on i, 13-18 normal/tangential parts, 19 area, 20 overlap,
 21-23 contact point; walls 1-3 contact point, 4-6 particle centre, 7-9 mesh index, triangle id,
 particle id, 10-12 force on the particle, 19-20 area/overlap.
 
 Frame: the decks move the surface (lower box) in −x, so the engine frame is the analysis frame
-(shear_sign = +1, engine.json). Mesh index 0 in wall/gran is the rough surface ('ps'); others 'pw'.
+(shear_sign = +1, recipe.json). Mesh index 0 in wall/gran is the rough surface ('ps'); others 'pw'.
 """
 
 from __future__ import annotations
 
 import io
-import json
 import re
 from pathlib import Path
 
@@ -24,9 +23,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
 
-from interphase.engines.base import Results
 from interphase.errors import InputError
-from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
+from interphase.recipe import read_record
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, Results
 
 _BLOCK = re.compile(
     rb"ITEM: TIMESTEP\s+(\d+)\s+ITEM: NUMBER OF (?:ENTRIES|ATOMS)\s+(\d+)\s+ITEM: BOX BOUNDS[^\n]*\n"
@@ -87,19 +86,14 @@ def _parse_rows(body: bytes, n_cols: int, n_rows: int, path: Path) -> np.ndarray
     return data
 
 
-def _shear_start(meta: dict) -> int:
-    """Step at which shear starts: written by the deck to shear_start.txt once consolidation has
-    reached the target platen force (read into meta by `_meta`); n_consolidate in older decks."""
-    return int(meta.get("shear_start_step", meta["n_consolidate"]))
-
-
 def _meta(folder: Path) -> dict:
-    """engine.json plus the shear start step the engine wrote (shear_start.txt), if any."""
-    meta = json.loads((folder / "engine.json").read_text())
+    """The run's clock: dt [s], shear velocity [m/s] (recipe.json) and the step the shear started at
+    (shear_start.txt, written by the deck once consolidation reached the target platen force;
+    without it, the end of the first consolidation stretch)."""
+    rec = read_record(folder)
     start = folder / "shear_start.txt"
-    if start.exists():
-        meta["shear_start_step"] = int(float(start.read_text().split()[0]))
-    return meta
+    n0 = int(float(start.read_text().split()[0])) if start.exists() else rec.steps.n_consolidate
+    return {"dt": rec.dt, "shear_velocity": rec.shear_velocity, "shear_start": n0}
 
 
 def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
@@ -108,7 +102,7 @@ def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
     missing = [n for n in names if n not in df.columns]
     if missing:
         raise InputError(f"column {missing[0]} is missing from the dump's header", where=df.attrs.get("path", "dump"),
-                         fix="the deck's compute must write every column (ENGINES.md): re-render and rerun")
+                         fix="the deck's compute must write every column (docs/engines.md): re-render and rerun")
     return df[names].to_numpy()
 
 
@@ -133,7 +127,7 @@ def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -
     with np.errstate(invalid="ignore", divide="ignore"):
         nx, nz = branch[:, 0] / nrm, branch[:, 2] / nrm
     fx, fz = f2[:, 0], f2[:, 2]
-    t = (df["timestep"].to_numpy() - _shear_start(meta)) * meta["dt"]
+    t = (df["timestep"].to_numpy() - meta["shear_start"]) * meta["dt"]
     return {
         "snapshot": df["timestep"].to_numpy(), "time": t, "shear_disp": t * meta["shear_velocity"], "kind": kind,
         "id1": id1.astype(np.int64), "id2": id2.astype(np.int64),
@@ -162,14 +156,14 @@ def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
 
 
 def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
-    """history.txt → History. The first row after a `run` shows mesh forces doubled (ENGINES.md):
+    """history.txt → History. The first row after a `run` shows mesh forces doubled (docs/engines.md):
     dropped. surface_fx/fz: force ON the surface (lower box) [N]; window_fx/fz: from the grains in
     the measuring window (Case.window); normal_force: platen force [N]."""
     folder = Path(folder)
     meta = meta or _meta(folder)
     h = pd.read_csv(folder / "history.txt", sep=r"\s+")
     h = h.iloc[1:].reset_index(drop=True)
-    t = (h["step"].to_numpy() - _shear_start(meta)) * meta["dt"]
+    t = (h["step"].to_numpy() - meta["shear_start"]) * meta["dt"]
     return pd.DataFrame({
         "time": t, "shear_disp": t * meta["shear_velocity"],
         "surface_fx": h["surface_fx"], "surface_fz": h["surface_fz"],
@@ -185,7 +179,7 @@ def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame
     if not len(df):
         return pd.DataFrame({c: pd.Series(dtype=float) for c in PARTICLE_COLUMNS})
     steps = df["timestep"].to_numpy()
-    t = (steps - _shear_start(meta)) * meta["dt"]
+    t = (steps - meta["shear_start"]) * meta["dt"]
     return pd.DataFrame({"snapshot": np.unique(steps, return_inverse=True)[1].astype(np.int64), "time": t,
                          "shear_disp": t * meta["shear_velocity"], "id": df["id"].to_numpy().astype(np.int64),
                          "x": df["x"].to_numpy(), "z": df["z"].to_numpy(), "vx": df["vx"].to_numpy(),

@@ -1,7 +1,7 @@
 """YADE driver output → ContactTable / History / Particles (interphase.tables), vectorised.
 
-Files written by templates/yade/_driver.py.j2 in the case folder (plain CSV/JSON, so YADE's own
-python needs nothing beyond the standard library):
+Files written by the YADE driver (engines/yade_driver.py) in the case folder (plain CSV/JSON, so
+YADE's own python needs nothing beyond the standard library):
   contacts.csv   step, b1, b2 (YADE body ids), contact point cx, cz, YADE normal nx, nz (b1 → b2),
                  force ON b2 fx, fz (normalForce + shearForce: exactly what YADE applied), overlap,
                  centres x1, z1, x2, z2 [m, N]
@@ -9,7 +9,7 @@ python needs nothing beyond the standard library):
   history.csv    step, surface_fx, surface_fz (force ON the moving wall group, summed O.forces),
                  platen_fz (force of the grains on the platen, +z), platen_z, n_contacts
   bodies.json    first grain id, grain count, [min, max] body ids of each wall group
-  params.json    dt, steps, shear velocity (the driver's inputs)
+  recipe.json    dt, steps, shear velocity (interphase.recipe, written with the input)
   shear_start.txt  the step the shear started at, when consolidation ended (time and shear
                  displacement count from it; folders without it: the first stretch's end)
 The driver already works in the analysis frame (x shear axis, z up, the surface moving −x), so only
@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from interphase.engines.base import Results
 from interphase.errors import InputError
-from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
+from interphase.recipe import read_record
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, Results
 
 #: contact points closer than this [m] are the same point (a shared facet vertex)
 SAME_POINT = 1e-10
@@ -50,15 +50,15 @@ def _read_csv(path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
 
 
 def _meta(folder: Path) -> dict:
-    for name in ("params.json", "bodies.json"):
-        if not (folder / name).exists():
-            raise InputError(f"{name} is missing", where=str(folder / name), fix="rerun the case")
-    p = json.loads((folder / "params.json").read_text())
+    """The run's clock (recipe.json: dt, shear velocity; shear_start.txt: the step the shear started
+    at, else the end of the first consolidation stretch) and the body ids (bodies.json)."""
+    if not (folder / "bodies.json").exists():
+        raise InputError("bodies.json is missing", where=str(folder / "bodies.json"), fix="rerun the case")
+    rec = read_record(folder)
     b = json.loads((folder / "bodies.json").read_text())
-    # the step the shear started at: written by the driver when consolidation ended
     start = folder / "shear_start.txt"
-    n0 = int(start.read_text().split()[0]) if start.exists() else p["steps"]["n_consolidate"]
-    return {"dt": p["dt"], "shear_start": n0, "shear_velocity": p["shear_velocity"],
+    n0 = int(start.read_text().split()[0]) if start.exists() else rec.steps.n_consolidate
+    return {"dt": rec.dt, "shear_start": n0, "shear_velocity": rec.shear_velocity,
             "first": b["first_grain"], "n_grains": b["n_grains"], "walls": b["walls"]}
 
 
