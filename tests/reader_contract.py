@@ -2,12 +2,16 @@
 
 A subclass provides a session-scoped fixture `finished` returning (folder, Results) for a finished
 tiny interface case with a flat surface, read by that engine's reader; every test below then runs on it.
+A subclass on recorded raw files (tests/data/raw_*, tests/test_readers_recorded.py) also overrides
+`reference` with the recorded reference.json: counts and first/last snapshot values the reader must
+reproduce; a live run has none.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 
@@ -67,3 +71,35 @@ class ReaderContract:
         res.contacts.to_parquet(tmp_path / "c.parquet")
         back = pd.read_parquet(tmp_path / "c.parquet")
         pd.testing.assert_frame_equal(back, res.contacts, check_categorical=False)
+
+    @pytest.fixture
+    def reference(self):
+        return None
+
+    def test_matches_the_recorded_reference(self, finished, reference):
+        if reference is None:
+            pytest.skip("a live run has no recorded reference")
+        _, res = finished
+        c, h, p = res.contacts, res.history, res.particles
+        approx = lambda v: pytest.approx(v, rel=1e-9, abs=1e-15)
+        assert len(c) == reference["n_contact_rows"]
+        assert sorted(int(k) for k in c.snapshot.unique()) == reference["snapshots"]
+        for which in ("first_snapshot", "last_snapshot"):
+            ref = reference[which]
+            s = c[c.snapshot == ref["snapshot"]]
+            assert float(s.time.iloc[0]) == approx(ref["time"]) and float(s.shear_disp.iloc[0]) == approx(ref["shear_disp"])
+            for kind, n in ref["rows"].items():
+                sel = s.kind == kind
+                assert int(sel.sum()) == n, (which, kind)
+                assert float(s.fx[sel].sum()) == approx(ref["sum_fx"][kind]), (which, kind)
+                assert float(s.fz[sel].sum()) == approx(ref["sum_fz"][kind]), (which, kind)
+            assert float(s.overlap.max()) == approx(ref["max_overlap"])
+        assert len(h) == reference["n_history_rows"]
+        for i, which in ((0, "first_history"), (-1, "last_history")):
+            assert {k: float(v) for k, v in h.iloc[i].items()} == {k: approx(v) for k, v in reference[which].items()}
+        assert len(p) == reference["n_particle_rows"]
+        assert int((p.snapshot == p.snapshot.min()).sum()) == reference["n_grains_first"]
+        assert int((p.snapshot == p.snapshot.max()).sum()) == reference["n_grains_last"]
+        last = p[p.snapshot == p.snapshot.max()]
+        for k, v in reference["last_particles_mean"].items():
+            assert float(last[k].mean()) == approx(v), k
