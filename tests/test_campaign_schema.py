@@ -207,3 +207,13 @@ def test_time_limits_grow_with_case_size():
     small = c.cases[0].case.replace(box_length_d50=12.0, box_height_d50=5.0, shear_distance=0.001)
     assert time_limit_minutes(small) < time_limit_minutes(c.cases[0].case)
     assert time_limit_minutes(c.cases[0].case, fixed=7.5) == 8
+
+
+def test_a_box_case_is_one_test_however_declared():
+    # the box has no rough surface: declared with a surface friction it is still the paired box
+    from interphase.case import Case, case_id
+
+    plain = Case(test="box", friction_pw=0.9)
+    declared = Case(test="box", friction_ps=0.2, friction_pw=0.9)
+    assert declared.friction_ps == 0.9 and declared.label() == plain.label() and "mu0.9" in plain.label()
+    assert case_id(declared, "liggghts", "v", "t") == case_id(plain, "liggghts", "v", "t")

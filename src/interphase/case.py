@@ -60,6 +60,10 @@ class Case:
             bad("profile", "an interface test needs a surface profile", "give profile = {kind = 'flat'} or another")
         if self.test == "box" and self.profile is not None:
             bad("profile", "a direct shear box test takes no surface profile", "remove the profile")
+        if self.test == "box" and self.friction_ps != self.friction_pw:
+            # the box has no rough surface: both halves are boundaries (friction_pw), so one box
+            # test has one identity, label and deck however it was declared
+            object.__setattr__(self, "friction_ps", self.friction_pw)
         if not isinstance(self.gradation, Gradation):
             bad("gradation", "gradation must be a Gradation")
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
