@@ -135,6 +135,41 @@ def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
     return steps * estimate_grains(case) / throughput
 
 
+#: Shear-band thickness [D50] the inertial-number estimate assumes: the summaries' own I (from the
+#: grains' velocity profiles) at 0.05 m/s, 100 kPa, 1000 grains, G = 50 MPa was 2.9–5.8e-3 on 45°
+#: and 72° saw-teeth (band 2–5 D50) and 1.5–1.9e-3 in the box (docs/convergence.md): a band of
+#: 3 D50 reproduces the interface values, the one the warning must not miss.
+BAND_ESTIMATE_D50 = 3.0
+QUASI_STATIC_I = 1e-3
+
+
+def inertial_estimate(case: Case, band_d50: float = BAND_ESTIMATE_D50) -> float:
+    """I ≈ γ̇·D50/√(σ/ρ) with γ̇ = v/(band_d50·D50), before the run [-]."""
+    return case.shear_velocity / (band_d50 * math.sqrt(case.normal_stress / case.density))
+
+
+def quasi_static_speed(case: Case, band_d50: float = BAND_ESTIMATE_D50, limit: float = QUASI_STATIC_I) -> float:
+    """The shear speed [m/s] at which the estimate reaches `limit`."""
+    return limit * band_d50 * math.sqrt(case.normal_stress / case.density)
+
+
+def rate_warnings(cases) -> list[str]:
+    """One line per distinct (speed, stress, density) whose estimated I ≥ 1e-3, naming the speed
+    that would make it quasi-static and how many cases it concerns."""
+    groups: dict[tuple, list] = {}
+    for c in cases:
+        groups.setdefault((c.shear_velocity, c.normal_stress, c.density), []).append(c)
+    out = []
+    for (v, sigma, rho), cs in sorted(groups.items()):
+        i = inertial_estimate(cs[0])
+        if i >= QUASI_STATIC_I:
+            fix = quasi_static_speed(cs[0])
+            out.append(f"{len(cs)} case(s) at shear_velocity = {v:g} m/s, σ = {sigma:g} Pa: estimated inertial "
+                       f"number I ≈ {i:.1e} ≥ {QUASI_STATIC_I:g} (not quasi-static; band {BAND_ESTIMATE_D50:g} D50 "
+                       f"assumed); shear_velocity ≤ {fix:.3g} m/s would make it quasi-static")
+    return out
+
+
 #: SLURM time limits are rounded up to one of these (minutes), so that a campaign makes few arrays
 TIME_BUCKETS = (1, 2, 5, 10, 15, 30, 60, 120, 240, 480, 720, 1440, 2880)
 

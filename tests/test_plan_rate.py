@@ -1,0 +1,24 @@
+"""The plan's inertial-number estimate warns before a run that is not quasi-static."""
+
+import math
+
+from interphase.campaign.plan import inertial_estimate, quasi_static_speed, rate_warnings
+from interphase.case import Case
+from interphase.surface.spec import ProfileSpec
+
+FLAT = ProfileSpec.make("flat")
+
+
+def test_estimate_is_the_inertial_number_of_a_three_grain_band():
+    c = Case(profile=FLAT, shear_velocity=0.05, normal_stress=100e3, density=2650.0)
+    gamma_dot = 0.05 / (3 * c.d50)
+    assert math.isclose(inertial_estimate(c), gamma_dot * c.d50 / math.sqrt(100e3 / 2650.0))
+    assert math.isclose(inertial_estimate(c.replace(shear_velocity=quasi_static_speed(c))), 1e-3)
+
+
+def test_warning_names_the_speed_that_fixes_it_and_counts_cases():
+    fast = [Case(profile=FLAT, seed=s, shear_velocity=0.05) for s in (1, 2)]
+    slow = [Case(profile=FLAT, shear_velocity=0.01)]
+    (w,) = rate_warnings(fast + slow)
+    assert w.startswith("2 case(s) at shear_velocity = 0.05") and "≤ 0.0184 m/s" in w
+    assert rate_warnings(slow) == []
