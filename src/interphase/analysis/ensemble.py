@@ -11,12 +11,15 @@ Definitions (shear displacement s [m], stress ratio r(s) [-] = τ/σ on the surf
   - seed-mean curve: r̄(s) = mean over seeds of r_i(s), each r_i linearly interpolated on a grid
     of `grid_points` over the shortest run's shear; then smoothed by a centred moving average of
     width `window` [m] (the summary's 0.5 D50).
-  - peak = max_s r̄_smooth(s), at s_peak; interval: percentile bootstrap over seeds (seeds drawn
-    with replacement, the whole definition recomputed; `n_boot` resamples, fixed generator seed).
+  - peak = max_s r̄_smooth(s), at s_peak. It equals the mean over seeds of each seed's mean r
+    over the smoothing window at s_peak (the "peak state" of each seed); interval: Student t on
+    those seed values. (A bootstrap of the maximum itself is biased upward — fewer distinct seeds,
+    a noisier mean curve, a higher maximum — and put the estimate at its interval's lower end.)
   - critical = mean over seeds of each seed's mean r over s ≥ (1 − critical_fraction)·s_end;
     interval: Student t on the seed means.
-  - E = peak(interface)/peak(box) and critical(interface)/critical(box); interval: bootstrap,
-    seeds of the two tests resampled independently.
+  - E = peak(interface)/peak(box) and critical(interface)/critical(box), from the seed values
+    above; interval: percentile bootstrap of the ratio of means, the seeds of the two tests
+    resampled independently (`n_boot` resamples, fixed generator seed).
 A single seed gives the values with NaN intervals (and says so).
 """
 
@@ -67,41 +70,52 @@ def _on_grid(curves, grid) -> np.ndarray:
     return out
 
 
-def _peak(mat: np.ndarray, grid: np.ndarray, window: float) -> tuple[float, float]:
-    mean = np.nanmean(mat, axis=0)
-    smooth = moving_average(grid, mean, window)
+def _peak_states(mat: np.ndarray, grid: np.ndarray, window: float) -> tuple[np.ndarray, float]:
+    """Each seed's mean ratio over the smoothing window at the seed-mean curve's peak, and s_peak."""
+    smooth = moving_average(grid, np.nanmean(mat, axis=0), window)
     if not np.isfinite(smooth).any():
-        return math.nan, math.nan
-    k = int(np.nanargmax(smooth))
-    return float(smooth[k]), float(grid[k])
+        return np.full(len(mat), np.nan), math.nan
+    at = float(grid[int(np.nanargmax(smooth))])
+    near = np.abs(grid - at) <= 0.5 * window + 1e-9 * window
+    return np.nanmean(mat[:, near], axis=1), at
 
 
-def _critical_means(mat: np.ndarray, grid: np.ndarray, fraction: float) -> np.ndarray:
+def _critical_states(mat: np.ndarray, grid: np.ndarray, fraction: float) -> np.ndarray:
     late = grid >= (1 - fraction) * grid[-1]
     return np.nanmean(mat[:, late], axis=1)
 
 
-def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
-                      grid_points: int = GRID_POINTS, n_boot: int = N_BOOT, seed: int = 0) -> EnsembleStrength:
-    """Peak and critical state of the seed ensemble `curves` = [(shear_disp [m], ratio [-]), ...]."""
-    curves = [c for c in curves if np.isfinite(np.asarray(c[1], float)).sum() >= 2]
-    n = len(curves)
-    if n == 0:
-        nan = math.nan
-        return EnsembleStrength(0, nan, nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
+def _t_interval(values: np.ndarray) -> tuple[float, float]:
+    n = len(values)
+    if n < 2:
+        return math.nan, math.nan
+    half = stats.t.ppf(0.975, n - 1) * float(np.std(values, ddof=1)) / math.sqrt(n)
+    m = float(np.mean(values))
+    return m - half, m + half
+
+
+def _states(curves, window: float, critical_fraction: float, grid_points: int):
     grid = _grid(curves, grid_points)
     mat = _on_grid(curves, grid)
-    peak, at = _peak(mat, grid, window)
-    cm = _critical_means(mat, grid, critical_fraction)
-    crit = float(np.mean(cm))
-    if n < 2:
-        return EnsembleStrength(1, peak, math.nan, math.nan, at, crit, math.nan, math.nan,
-                                "one seed: no interval (run ≥ 3 seeds)")
-    rng = np.random.default_rng(seed)
-    boot = np.array([_peak(mat[rng.integers(0, n, n)], grid, window)[0] for _ in range(n_boot)])
-    lo, hi = np.nanpercentile(boot, [2.5, 97.5])
-    half = stats.t.ppf(0.975, n - 1) * float(np.std(cm, ddof=1)) / math.sqrt(n)
-    return EnsembleStrength(n, peak, float(lo), float(hi), at, crit, crit - half, crit + half)
+    peaks, at = _peak_states(mat, grid, window)
+    return peaks, at, _critical_states(mat, grid, critical_fraction)
+
+
+def _usable(curves) -> list:
+    return [c for c in curves if np.isfinite(np.asarray(c[1], float)).sum() >= 2]
+
+
+def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
+                      grid_points: int = GRID_POINTS) -> EnsembleStrength:
+    """Peak and critical state of the seed ensemble `curves` = [(shear_disp [m], ratio [-]), ...]."""
+    curves = _usable(curves)
+    if not curves:
+        nan = math.nan
+        return EnsembleStrength(0, nan, nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
+    peaks, at, crits = _states(curves, window, critical_fraction, grid_points)
+    reason = "" if len(curves) > 1 else "one seed: no interval (run ≥ 3 seeds)"
+    return EnsembleStrength(len(curves), float(np.mean(peaks)), *_t_interval(peaks), at,
+                            float(np.mean(crits)), *_t_interval(crits), reason)
 
 
 @dataclass(frozen=True)
@@ -123,23 +137,20 @@ def ensemble_efficiency(interface_curves, box_curves, window: float, *,
                         n_boot: int = N_BOOT, seed: int = 0) -> EnsembleEfficiency:
     """E = tan δ / tan φ from the two ensembles (peak over peak, critical over critical), with
     bootstrap intervals (each test's seeds resampled on its own)."""
-    a = ensemble_strength(interface_curves, window, critical_fraction=critical_fraction, grid_points=grid_points,
-                          n_boot=1, seed=seed)
-    b = ensemble_strength(box_curves, window, critical_fraction=critical_fraction, grid_points=grid_points,
-                          n_boot=1, seed=seed)
-    e_peak, e_crit = a.peak / b.peak, a.critical / b.critical
-    if a.n_seeds < 2 or b.n_seeds < 2:
+    a, b = _usable(interface_curves), _usable(box_curves)
+    if not a or not b:
+        nan = math.nan
+        return EnsembleEfficiency(nan, nan, nan, nan, nan, nan, "no run with a stress ratio on a side")
+    pa, _, ca = _states(a, window, critical_fraction, grid_points)
+    pb, _, cb = _states(b, window, critical_fraction, grid_points)
+    e_peak, e_crit = float(pa.mean() / pb.mean()), float(ca.mean() / cb.mean())
+    if len(a) < 2 or len(b) < 2:
         nan = math.nan
         return EnsembleEfficiency(e_peak, nan, nan, e_crit, nan, nan, "fewer than two seeds on a side: no interval")
-    ga, gb = _grid(interface_curves, grid_points), _grid(box_curves, grid_points)
-    ma, mb = _on_grid(interface_curves, ga), _on_grid(box_curves, gb)
-    ca, cb = _critical_means(ma, ga, critical_fraction), _critical_means(mb, gb, critical_fraction)
     rng = np.random.default_rng(seed)
-    na, nb = len(ma), len(mb)
-    peaks, crits = np.empty(n_boot), np.empty(n_boot)
-    for k in range(n_boot):
-        ia, ib = rng.integers(0, na, na), rng.integers(0, nb, nb)
-        peaks[k] = _peak(ma[ia], ga, window)[0] / _peak(mb[ib], gb, window)[0]
-        crits[k] = ca[ia].mean() / cb[ib].mean()
+    ia = rng.integers(0, len(a), (n_boot, len(a)))
+    ib = rng.integers(0, len(b), (n_boot, len(b)))
+    peaks = pa[ia].mean(axis=1) / pb[ib].mean(axis=1)
+    crits = ca[ia].mean(axis=1) / cb[ib].mean(axis=1)
     (pl, ph), (cl, ch) = np.nanpercentile(peaks, [2.5, 97.5]), np.nanpercentile(crits, [2.5, 97.5])
     return EnsembleEfficiency(e_peak, float(pl), float(ph), e_crit, float(cl), float(ch))
