@@ -7,7 +7,7 @@ import pandas as pd
 
 from interphase.analysis.quasistatic import checks
 from interphase.case import case_from_dict
-from interphase.engines.base import Results
+from interphase.tables import Results
 
 DATA = Path(__file__).parent / "data" / "liggghts_sawtooth45"
 

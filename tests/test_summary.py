@@ -12,9 +12,8 @@ import pytest
 
 from interphase.analysis.summary import ROW_KEYS, Summary, summarise
 from interphase.case import Case, case_from_dict
-from interphase.engines.base import Results
 from interphase.surface.spec import ProfileSpec
-from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, MissingColumnError
+from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, MissingColumnError, Results
 
 DATA = Path(__file__).parent / "data" / "liggghts_sawtooth45"
 

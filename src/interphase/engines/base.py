@@ -18,6 +18,7 @@ import ast
 import functools
 import hashlib
 import inspect
+import json
 import os
 import re
 import shlex
@@ -31,7 +32,7 @@ from pathlib import Path
 from interphase import recipe as recipe_module
 from interphase.case import Case
 from interphase.errors import InputError
-from interphase.recipe import read_record
+from interphase.recipe import RECIPE, Recipe, read_record
 from interphase.tables import Results
 
 #: classified causes of an engine failure
@@ -108,9 +109,11 @@ class Engine(abc.ABC):
     template_suffix: str = ""            # of the templates interface_shear<suffix>, direct_shear<suffix>
     recipe_modules: tuple[str, ...] = RECIPE_MODULES   # paths below the package
 
-    def __init__(self, profile: EngineProfile | None = None, templates: str | os.PathLike | None = None):
+    def __init__(self, profile: EngineProfile | None = None, templates: str | os.PathLike | None = None,
+                 recipe: Recipe = RECIPE):
         self.profile = profile or self.default_profile()
         self.templates = Path(templates) if templates else template_root() / self.name
+        self.recipe = recipe
 
     # -- machine side
     @classmethod
@@ -130,13 +133,14 @@ class Engine(abc.ABC):
         return self.version_format.format(m.group(1).strip()) if m else "unknown"
 
     def template_hash(self) -> str:
-        """SHA-256 (short) of the recipe: every template file of this engine (names included) and the
-        code of the Python modules that decide the case folder's content (the engine's module and
-        `recipe_modules`: device, packing, rendering, the Recipe; YADE adds its driver), so that a
-        change of physics made in Python (a rolling model, a wall height) changes every case id as
-        a template edit does. Code is hashed as its syntax tree without docstrings: comments,
-        layout and docstrings do not count."""
+        """SHA-256 (short) of the recipe: the engine's Recipe values, every template file of this
+        engine (names included) and the code of the Python modules that decide the case folder's
+        content (the engine's module and `recipe_modules`: device, packing, rendering, the Recipe;
+        YADE adds its driver), so that a change of physics made in Python (a rolling model, a wall
+        height) changes every case id as a template edit does. Code is hashed as its syntax tree
+        without docstrings: comments, layout and docstrings do not count."""
         h = hashlib.sha256()
+        h.update(json.dumps(self.recipe.to_dict(), sort_keys=True).encode())
         for p in sorted(self.templates.rglob("*")):
             if p.is_file():
                 h.update(p.relative_to(self.templates).as_posix().encode())

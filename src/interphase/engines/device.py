@@ -157,6 +157,8 @@ def device(case: Case, recipe: Recipe = RECIPE) -> Device:
                  (0.0, z_mid, -far, z_mid))                   # left flange (faces up)
         z_lo = -d_max
         x_lo, x_hi = -far - D - d_max, L + far + d_max
+    for a in (pack.x, pack.z, pack.diameter):     # shared through the cache: read-only
+        a.flags.writeable = False
     platen_z = pack.top + 0.5 * d_max
     inset = 0.02 * d_max
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=0.45 * d_max * 2,

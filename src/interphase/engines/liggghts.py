@@ -85,7 +85,7 @@ class Liggghts(Engine):
     template_suffix = ".in.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
-        dev = device(case)
+        dev = device(case, self.recipe)
         values = deck_values(dev)
         x_lo, x_hi, z_lo, z_hi = dev.bounds
         box = (x_lo, x_hi, -case.gradation.d_max, case.gradation.d_max, z_lo, z_hi)

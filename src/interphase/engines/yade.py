@@ -101,7 +101,7 @@ class Yade(Engine):
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
-        dev = device(case)
+        dev = device(case, self.recipe)
         return {"driver.py": environment(self.templates).get_template(self.template_name(case)).render(),
                 "params.json": json.dumps(driver_input(dev), indent=None, allow_nan=False),
                 RECIPE_FILE: dev.record(self.name).to_json()}

@@ -1,0 +1,203 @@
+"""One device, two serialisers: both engines' rendered files state the same test device.
+
+The quantities are read back from what each engine writes (LIGGGHTS: in.deck, the STL meshes,
+grains.data; YADE: params.json), not from the Device object, and compared: walls and their gaps,
+exit planes, platen, domain bounds, measuring window, time step, consolidation and shear step
+counts, snapshot and history intervals, grains. No engine runs here.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from interphase.case import Case
+from interphase.engines import device as device_module
+from interphase.engines.base import EngineProfile
+from interphase.engines.liggghts import Liggghts
+from interphase.engines.yade import Yade
+from interphase.errors import InputError
+from interphase.material import Gradation
+from interphase.recipe import RECIPE, Recipe, RunRecord, Steps, read_record
+from interphase.surface.spec import ProfileSpec
+
+SMALL = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10, shear_distance=2e-3,
+             snapshot_every=0.5e-3, friction_ps=0.5)
+CASES = {
+    # the 45° saw-tooth with well-graded grains: the left wall's gap differs from the right's
+    "sawtooth45": Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), gradation=Gradation("poly"), **SMALL),
+    "box": Case(test="box", **SMALL),
+}
+
+
+def _engines():
+    """Both engines with plain profiles: rendering needs no binary."""
+    return Liggghts(profile=EngineProfile("liggghts")), Yade(profile=EngineProfile("yade"))
+
+
+def stl_segments(text: str) -> tuple[list[tuple[float, float, float, float]], float]:
+    """(segments (x0, z0, x1, z1), y reach) of an STL written as two triangles per segment: the first
+    half of the facets are (x0, −w, z0), (x1, −w, z1), (x1, +w, z1)."""
+    v = np.array([[float(c) for c in ln.split()[1:]] for ln in text.splitlines() if ln.strip().startswith("vertex")])
+    tri = v.reshape(-1, 3, 3)
+    first = tri[: len(tri) // 2]
+    return [(a[0], a[2], b[0], b[2]) for a, b, _ in first], float(first[0][2][1])
+
+
+def facet_segments(triangles) -> tuple[list[tuple[float, float, float, float]], float]:
+    """(segments, y reach) of YADE's in-plane facets [x0, 0, z0, x1, 0, z1, apex x, width, apex z]."""
+    return [(t[0], t[2], t[3], t[5]) for t in triangles], triangles[0][7]
+
+
+def liggghts_device(files: dict) -> dict:
+    """The shared quantities as the LIGGGHTS files state them."""
+    deck = files["in.deck"]
+
+    def find(pattern, cast=float):
+        m = re.search(pattern, deck, re.MULTILINE)
+        assert m, pattern
+        return [cast(g) for g in m.groups()] if len(m.groups()) > 1 else cast(m.group(1))
+    runs = [int(n) for n in re.findall(r"^run\s+(\d+)", deck, re.MULTILINE)]
+    interface = "sides.stl" in files
+    moving, reach = stl_segments(files["surface.stl" if interface else "lower.stl"])
+    fixed, _ = stl_segments(files["sides.stl" if interface else "upper.stl"])
+    platen, _ = stl_segments(files["platen.stl"])
+    data = files["grains.data"]
+    xlo, xhi = (float(s) for s in re.search(r"^(\S+) (\S+) xlo xhi", data, re.MULTILINE).groups())
+    zlo, zhi = (float(s) for s in re.search(r"^(\S+) (\S+) zlo zhi", data, re.MULTILINE).groups())
+    atoms = np.loadtxt(data.split("Atoms\n\n", 1)[1].splitlines(), ndmin=2)
+    com_x, com_z, force = find(r"servo file platen\.stl type 3 com (\S+) 0\.0 (\S+) ctrlPV force .* target_val (\S+)")
+    out = dict(
+        moving=moving, fixed=fixed, platen=platen, reach=reach, platen_com=(com_x, com_z), platen_force=-force,
+        platen_band=tuple(find(r'if "\$\{pfc\} > (\S+) && \$\{pfc\} < (\S+)"')),
+        dt=find(r"^timestep\s+(\S+)"), skin=find(r"^neighbor\s+(\S+) bin"),
+        shear_velocity=-find(r"move/mesh mesh \S+ linear (\S+) "),
+        steps=dict(n_consolidate=runs[0], n_chunk=runs[1], n_shear=runs[2],
+                   n_chunks_max=find(r"^variable kc loop (\d+)", int),
+                   n_snapshot=find(r"^dump dpc all local (\d+)", int), n_history=find(r"^fix hist all print (\d+)", int)),
+        bounds=(xlo, xhi, zlo, zhi), grains=atoms[:, [4, 6, 2]] * [1, 1, 0.5],          # x, z, radius
+        window=tuple(find(r"^variable win atom \(x>(\S+)\)\*\(x<(\S+)\)\*\(z<(\S+)\)")) if interface else None,
+        exits=None,
+    )
+    if interface:
+        out["exits"] = [stl_segments(files[f"exit_{side}.stl"])[0][0][0] for side in ("left", "right")]
+    return out
+
+
+def yade_device(files: dict) -> dict:
+    """The shared quantities as YADE's params.json states them."""
+    p = json.loads(files["params.json"])
+    walls = {w["index"]: facet_segments(w["triangles"]) for w in p["walls"]}
+    platen = walls[2][0]
+    g = p["grains"]
+    return dict(
+        moving=walls[0][0], fixed=walls[1][0], platen=platen, reach=walls[0][1],
+        platen_com=(0.5 * (platen[0][0] + platen[0][2]), platen[0][1]), platen_force=p["platen_force"],
+        platen_band=(p["platen_force_lo"], p["platen_force_hi"]), dt=p["dt"], skin=None,
+        shear_velocity=p["shear_velocity"], steps={k: p["steps"][k] for k in p["steps"]},
+        bounds=tuple(p["bounds"]), grains=np.column_stack([g["x"], g["z"], g["r"]]),
+        window=tuple(p["window"]) if p["window"] else None, exits=p["exits"],
+    )
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_both_engines_render_one_device(name):
+    case = CASES[name]
+    lig_engine, yade_engine = _engines()
+    device_module.device.cache_clear()
+    lig_files, yade_files = lig_engine.render(case), yade_engine.render(case)
+    assert device_module.device.cache_info().misses == 1       # computed once for both engines
+    lig, yade = liggghts_device(lig_files), yade_device(yade_files)
+    for key in ("moving", "fixed", "platen", "reach", "platen_force", "platen_band", "dt", "shear_velocity",
+                "steps", "bounds", "window", "exits"):
+        assert lig[key] == yade[key], key          # exact: both write full float precision
+    assert lig["platen_com"][1] == yade["platen_com"][1] == lig["platen"][0][1]          # platen z
+    assert lig["platen_com"][0] == pytest.approx(yade["platen_com"][0], rel=1e-15)        # its centre
+    np.testing.assert_allclose(lig["grains"], yade["grains"], rtol=1e-11)                 # data file: 12 digits
+    # the snapshot schedule: every snapshot a history row, shear starting on a dump step
+    s = lig["steps"]
+    assert s["n_snapshot"] % s["n_history"] == 0
+    assert s["n_consolidate"] % s["n_snapshot"] == 0 and s["n_chunk"] % s["n_snapshot"] == 0
+    assert s["n_snapshot"] * lig["dt"] == pytest.approx(case.snapshot_every / case.shear_velocity, rel=0.02)
+    # recipe.json: one record, the same for both engines but for the engine's name
+    lig_rec, yade_rec = (json.loads(f["recipe.json"]) for f in (lig_files, yade_files))
+    assert lig_rec.pop("engine") == "liggghts" and yade_rec.pop("engine") == "yade"
+    assert lig_rec == yade_rec
+    assert lig_rec["steps"] == s and lig_rec["dt"] == lig["dt"] and lig_rec["n_grains"] == len(lig["grains"])
+    if case.test == "interface":
+        # side-wall gaps above the surface's highest point: the right wall 0.05·d_min, the left one
+        # the valley gap (wider on the 45° saw-tooth), the same in both engines
+        top = max(max(z0, z1) for _, z0, _, z1 in yade["moving"])
+        for dev in (lig, yade):
+            (_, _, _, left_bottom), (_, right_bottom, _, _) = dev["fixed"]
+            assert right_bottom - top == pytest.approx(0.05 * case.gradation.d_min, rel=1e-9)
+            assert left_bottom - top > 0.05 * case.gradation.d_min
+        assert lig["exits"] == yade["exits"] == [0.0, case.box_length]
+        assert lig["window"][:2] == pytest.approx(case.window, rel=1e-15)
+    else:
+        assert lig["window"] is None and yade["window"] is None and lig["exits"] is None
+
+
+def test_device_is_cached_per_case_and_frozen():
+    case = CASES["box"]
+    assert device_module.device(case) is device_module.device(case.replace())
+    with pytest.raises(AttributeError):
+        device_module.device(case).dt = 1.0
+
+
+def test_recipe_record_round_trips_and_old_folders_are_read(tmp_path):
+    dev = device_module.device(CASES["sawtooth45"])
+    rec = dev.record("yade")
+    back = RunRecord.from_dict(json.loads(rec.to_json()))
+    assert back == rec and back.recipe == RECIPE
+    assert isinstance(back.steps, Steps) and back.steps.most == (rec.steps.n_consolidate + rec.steps.n_chunks_max
+                                                                 * rec.steps.n_chunk + rec.steps.n_shear)
+    # folders written before recipe.json: LIGGGHTS' engine.json (flat), YADE's params.json (nested)
+    lig = tmp_path / "lig"
+    lig.mkdir()
+    files = _engines()[0].render(CASES["sawtooth45"])
+    (lig / "engine.json").write_text(files["engine.json"])
+    old = read_record(lig)
+    assert old.recipe is None and (old.dt, old.steps, old.n_grains, old.window) == (rec.dt, rec.steps, rec.n_grains,
+                                                                                   rec.window)
+    y = tmp_path / "yade"
+    y.mkdir()
+    p = json.loads(_engines()[1].render(CASES["sawtooth45"])["params.json"]) | dict(n_grains=rec.n_grains)
+    (y / "params.json").write_text(json.dumps(p))
+    assert read_record(y).steps == rec.steps and read_record(y).engine == "yade"
+    with pytest.raises(InputError, match="recipe.json is missing"):
+        read_record(tmp_path)
+
+
+def test_a_changed_recipe_changes_the_device():
+    slow = Recipe(history_points=100, consolidation_time=0.04)
+    a, b = device_module.device(CASES["box"]), device_module.device(CASES["box"], slow)
+    assert b.steps.n_consolidate > a.steps.n_consolidate and b.steps.n_history >= a.steps.n_history
+    assert b.steps.n_shear == a.steps.n_shear and b.moving == a.moving
+
+
+def test_template_hash_covers_the_recipe_modules(monkeypatch):
+    """The case id changes with the code that decides a case folder's content: the engine module,
+    device, packing, rendering and recipe modules, and YADE's driver module."""
+    from interphase.engines import base
+
+    seen = []
+    monkeypatch.setattr(base, "code_digest", lambda path: seen.append(path.name) or "x")
+    lig, yade = _engines()
+    lig.template_hash()
+    assert seen == ["liggghts.py", "device.py", "packing.py", "render.py", "recipe.py"]
+    seen.clear()
+    yade.template_hash()
+    assert seen == ["yade.py", "device.py", "packing.py", "render.py", "recipe.py", "yade_driver.py"]
+
+
+def test_an_engine_renders_its_recipe_and_its_case_ids_follow_it():
+    slow = Recipe(history_points=100)
+    base, other = Liggghts(profile=EngineProfile("liggghts")), Liggghts(profile=EngineProfile("liggghts"), recipe=slow)
+    a, b = base.render(CASES["box"]), other.render(CASES["box"])
+    assert json.loads(b["recipe.json"])["recipe"]["history_points"] == 100
+    assert liggghts_device(b)["steps"]["n_history"] > liggghts_device(a)["steps"]["n_history"]
+    assert other.template_hash() != base.template_hash()
