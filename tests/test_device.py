@@ -201,3 +201,28 @@ def test_an_engine_renders_its_recipe_and_its_case_ids_follow_it():
     assert json.loads(b["recipe.json"])["recipe"]["history_points"] == 100
     assert liggghts_device(b)["steps"]["n_history"] > liggghts_device(a)["steps"]["n_history"]
     assert other.template_hash() != base.template_hash()
+
+
+def test_side_walls_clear_the_peaks_for_every_study_profile():
+    # deep valleys (Group 1 Rt/D50 ≥ 2) and Group 4's B, D, G once put the left wall's edge inside
+    # the teeth: every interface case of the study's campaigns now has both edges above the peaks
+    from pathlib import Path
+
+    from interphase.campaign.schema import load_campaign
+    from interphase.surface.profiles import from_spec
+
+    root = Path(__file__).resolve().parents[1] / "campaigns"
+    seen = set()
+    for name in ("group1", "group2", "group3", "group4", "group5"):
+        for pc in load_campaign(root / f"{name}.toml").cases:
+            c = pc.case
+            key = (c.profile, c.gradation, c.box_length_d50)
+            if c.test != "interface" or key in seen:
+                continue
+            seen.add(key)
+            prof = from_spec(c.profile, c.d50, c.box_length)
+            top = float(prof.z.max())
+            walls = device_module.side_walls(prof, c.box_length, c.gradation.d_min, c.gradation.d_max, c.d50, top + 1)
+            for x0, z0, x1, z1 in walls:
+                assert min(z0, z1) > top, (name, c.label())
+    assert len(seen) > 40

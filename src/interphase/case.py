@@ -34,7 +34,9 @@ class Case:
     gradation: Gradation = field(default_factory=Gradation)
     friction_pp: float = 0.5                # particle–particle sliding friction [-]
     friction_ps: float = 0.2                # particle–surface [-] (tan φμ)
-    friction_pw: float = 0.9                # particle–boundary: box walls, platen [-]
+    friction_pw: float = 0.9                # particle–boundary: platen, the box's lower half [-]
+    friction_side: float = 0.0              # particle–side wall: the fixed walls (interface box sides,
+                                            # the box's upper half) [-]; study 0.9, see docs/strength.md
     rolling_friction: float = 0.1           # rolling-friction coefficient, all contacts [-]
     density: float = 2650.0                 # [kg/m³]
     shear_modulus: float = 29e9             # [Pa] (study: 29 GPa; campaigns may soften it, see docs)
@@ -68,7 +70,7 @@ class Case:
             bad("gradation", "gradation must be a Gradation")
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
                     "snapshot_every", "box_length_d50", "box_height_d50")
-        nonneg = ("friction_pp", "friction_ps", "friction_pw", "rolling_friction")
+        nonneg = ("friction_pp", "friction_ps", "friction_pw", "friction_side", "rolling_friction")
         for f in positive + nonneg + ("poisson", "restitution"):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
@@ -110,6 +112,31 @@ class Case:
         """Quasi-2D out-of-plane thickness t [m] that converts stress to force on the monolayer
         (F = σ·L·t): one grain layer, t = D50. Both engines and the analysis use it."""
         return self.d50
+
+    @property
+    def surface_margin(self) -> float:
+        """How far the surface reaches beyond the box at each end before the shear [m]: 2·d_max."""
+        return 2 * self.gradation.d_max
+
+    def surface(self):
+        """The whole rough surface of an interface test in the engine frame at the start of the
+        shear [m]: from x = −surface_margin to beyond L + shear_distance + surface_margin (it slides
+        −x by shear_distance beneath the box [0, L]). The one profile object of the case: the
+        engines build their meshes from it, the analysis measures it (`sheared_surface`)."""
+        from interphase.surface.profiles import Profile, from_spec
+
+        m = self.surface_margin
+        prof = from_spec(self.profile, self.d50, self.box_length + self.shear_distance + 2 * m)
+        return Profile(prof.x - m, prof.z, prof.periodic, prof.name)
+
+    def sheared_surface(self):
+        """The part of `surface()` that passes beneath the box during the shear, x ∈ [0, L + shear
+        distance] [m]: what θa, Rn, Rnc describe for this case. A periodic profile is returned whole
+        (its every period is the same)."""
+        from interphase.surface.profiles import crop
+
+        s = self.surface()
+        return s if s.periodic else crop(s, 0.0, self.box_length + self.shear_distance)
 
     @property
     def window(self) -> tuple[float, float]:

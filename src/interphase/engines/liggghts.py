@@ -60,16 +60,17 @@ def mesh_files(dev: Device) -> dict[str, str]:
 def deck_values(dev: Device) -> dict:
     """The deck template's values: numbers and validated names only."""
     case, r, s = dev.case, dev.recipe, dev.steps
-    # type pairs (1 grain, 2 surface/lower box, 3 other walls); wall–wall pairs never meet
+    # type pairs (1 grain, 2 surface/lower box, 3 platen, 4 fixed side walls); walls never meet walls
     mu_s = case.friction_ps if case.test == "interface" else case.friction_pw
+    grain_with = [case.friction_pp, mu_s, case.friction_pw, case.friction_side]
     vmax, kp = platen_servo(dev)
     lo, hi = dev.platen_band
     moving, fixed = (MESH.get(n, n) for n in dev.wall_names)
     return dict(
         version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
-        E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=[case.restitution] * 9,
-        friction=[case.friction_pp, mu_s, case.friction_pw, mu_s, 0.0, 0.0, case.friction_pw, 0.0, 0.0],
-        rolling=[case.rolling_friction] * 9, rolling_model=r.rolling_model,
+        E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=[case.restitution] * 16,
+        friction=grain_with + [v for mu in grain_with[1:] for v in (mu, 0.0, 0.0, 0.0)],   # symmetric 4 × 4
+        rolling=[case.rolling_friction] * 16, rolling_model=r.rolling_model,
         dt=dev.dt, skin=dev.skin, moving=moving, fixed=fixed, window=dev.window, exits=dev.exits is not None,
         platen_com=dev.platen_com, platen_force=dev.platen_force, servo_vmax=vmax, servo_kp=kp,
         shear_velocity=case.shear_velocity, n_consolidate=s.n_consolidate, n_shear=s.n_shear, n_chunk=s.n_chunk,

@@ -58,7 +58,7 @@ def lattice_packing(case: Case, x_min: float, x_max: float, z_floor: float) -> P
 def write_liggghts_data(p: Packing, density: float, box: tuple[float, ...]) -> str:
     """LIGGGHTS `atom_style granular` data file: `id type diameter density x y z`."""
     xlo, xhi, ylo, yhi, zlo, zhi = box
-    head = (f"interphase-dem grains\n\n{p.n} atoms\n3 atom types\n\n"
+    head = (f"interphase-dem grains\n\n{p.n} atoms\n4 atom types\n\n"
             f"{xlo!r} {xhi!r} xlo xhi\n{ylo!r} {yhi!r} ylo yhi\n{zlo!r} {zhi!r} zlo zhi\n\nAtoms\n\n")
     ids = np.arange(1, p.n + 1)
     table = np.column_stack([ids, np.ones(p.n), p.diameter, np.full(p.n, density), p.x, np.zeros(p.n), p.z])

@@ -55,7 +55,7 @@ def contact_parameters(case: Case, typical_overlap: float = RECIPE.typical_overl
     rolls = case.rolling_friction > 0
     mu_s = case.friction_ps if case.test == "interface" else case.friction_pw
     return dict(E=E, E_wall=E * FACET_STIFFENING, nu=case.poisson, density=case.density, mu_pp=case.friction_pp,
-                mu_ps=mu_s, mu_pw=case.friction_pw, betan=b, betas=b, eta=case.rolling_friction / 2,
+                mu_ps=mu_s, mu_pw=case.friction_pw, mu_side=case.friction_side, betan=b, betas=b, eta=case.rolling_friction / 2,
                 # YADE caps the rolling moment only when eta·R·Fn > 0 (Law2_ScGeom_MindlinPhys_Mindlin:
                 # `if (MomentMax > 0)`): eta = 0 with krot > 0 is an UNLIMITED rolling spring, and
                 # grains on a flat could not roll at all (μs = 0.5 gave exactly 0.500, measured)

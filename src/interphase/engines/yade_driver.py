@@ -83,12 +83,12 @@ class Driver:
         self.y, self.O = y, y.O
         O, M = y.O, P["material"]
         self.P, self.M = P, M
-        # materials: 0 grains, 1 moving group, 2 other walls. Walls are stiffer (E_wall) because
+        # materials: 0 grains, 1 moving group, 2 platen, 3 fixed side walls. Walls are stiffer (E_wall) because
         # YADE's facet–sphere geometry uses a facet radius of 2r (engines/yade.py)
         mats = [O.materials.append(y.FrictMat(young=E, poisson=M["nu"], density=M["density"],
                                               frictionAngle=math.atan(M[mu]), label=label))
                 for E, mu, label in ((M["E"], "mu_pp", "grain"), (M["E_wall"], "mu_ps", "surface"),
-                                     (M["E_wall"], "mu_pw", "wall"))]
+                                     (M["E_wall"], "mu_pw", "wall"), (M["E_wall"], "mu_side", "side"))]
         G = P["grains"]
         self.grain_ids = []
         for x, z, r in zip(G["x"], G["z"], G["r"]):
@@ -99,7 +99,7 @@ class Driver:
         # wall groups in LIGGGHTS mesh order: index 0 = moving group ('ps'), then fixed walls, platen
         self.groups = []
         for g in P["walls"]:
-            mat = mats[1] if g["index"] == 0 else mats[2]
+            mat = mats[(1, 3, 2)[g["index"]]]        # wall groups: moving, fixed sides, platen
             self.groups.append([O.bodies.append(y.utils.facet([tuple(t[k:k + 3]) for k in (0, 3, 6)],
                                                               material=mat, fixed=True)) for t in g["triangles"]])
         self.surface_ids, self.platen_ids = self.groups[0], self.groups[-1]
@@ -118,7 +118,8 @@ class Driver:
                 [y.Ip2_FrictMat_FrictMat_MindlinPhys(
                     frictAngle=mm(matches=[(mats[0], mats[0], math.atan(M["mu_pp"])),
                                            (mats[0], mats[1], math.atan(M["mu_ps"])),
-                                           (mats[0], mats[2], math.atan(M["mu_pw"]))]),
+                                           (mats[0], mats[2], math.atan(M["mu_pw"])),
+                                           (mats[0], mats[3], math.atan(M["mu_side"]))]),
                     betan=mm(algo="val", val=M["betan"]), betas=mm(algo="val", val=M["betas"]),
                     krot=M["krot"], eta=M["eta"])],
                 [y.Law2_ScGeom_MindlinPhys_Mindlin(includeMoment=True)],
