@@ -26,9 +26,9 @@ def row(summary):
 
 def test_theta_r_at_surface_near_interface_friction_angle(row):
     """The study: θr at the surface ≈ the interface friction angle atan(peak stress ratio), within 10°.
-    Measured (docs/liggghts.md) for its well-graded material in this device: 3.3–8.3° in 7 of 9
-    seeds, 11.0° and 14.9° in the other two (8.1° here, peak at 2.9 of 4 mm); uniform grains sit
-    further off, 5.8–14.5°."""
+    Measured (docs/liggghts.md) for its well-graded material with side walls at μ 0.9: 3.3–8.3° in 7
+    of 9 seeds, 11.0° and 14.9° in the other two; uniform grains further off, 5.8–14.5°. This fixture
+    (frictionless side walls): 4.5° (peak 0.558 at 0.45 of 4 mm)."""
     delta = math.degrees(math.atan(row["peak_stress_ratio"]))
     assert 0 < row["theta_r_surface_deg"] - delta <= 10.0, (row["theta_r_surface_deg"], delta)
 
@@ -37,7 +37,7 @@ def test_lee_faces_carry_part_of_the_surface_force(summary):
     """Why θr sits above δ: at every loaded snapshot part of the surface force is on lee faces
     (normals leaning with the shear), which cuts ΣFx and so the summed-force angle (= atan of the
     snapshot's stress ratio) below θr (0.11–0.30 of Σ|f| at the peak in the 12 runs of
-    docs/liggghts.md; 0.17–0.47 over this fixture's loaded snapshots)."""
+    docs/liggghts.md; 0.15–0.38 over this fixture's 17 loaded snapshots)."""
     s = summary.series
     s = s[s["load_balanced"] & s["lee_share_surface"].notna()]
     assert len(s) >= 5

@@ -26,7 +26,10 @@ def history(shear_disp, ratio, normal=1.0, platen_z=None):
 def test_surface_ratio_sign_and_box_ratio():
     h = history([0, 1e-4], [0.3, 0.4], normal=2.0)
     assert st.surface_stress_ratio(h).tolist() == pytest.approx([0.3, 0.4])
-    assert st.box_stress_ratio(h.assign(normal_force=-2.0)).tolist() == pytest.approx([0.3, 0.4])
+    # box: the plane's own forces (lower half), not the platen's, which side-wall friction unloads
+    assert st.box_stress_ratio(h.assign(normal_force=-5.0)).tolist() == pytest.approx([0.3, 0.4])
+    assert st.box_stress_ratio(h.assign(surface_fz=-4.0)).tolist() == pytest.approx([0.15, 0.2])
+    assert math.isnan(st.box_stress_ratio(h.assign(surface_fz=0.0)).iloc[0])
     # no compressive normal force on the surface: undefined, not infinite
     assert math.isnan(st.surface_stress_ratio(h.assign(window_fz=0.0)).iloc[0])
     # the ratio is the measuring window's (Case.window), not the whole surface's
@@ -75,12 +78,12 @@ def test_residual_and_dilation():
 
 def test_load_balance_mask():
     h = history([0, 1, 2], [0.1, 0.2, 0.3])
-    h["window_fz"] = [-1.0, -1.2, -2.0]
+    h["surface_fz"] = [-1.0, -1.2, -2.0]
     assert st.load_balanced(h).tolist() == [True, True, False]
     assert st.load_balanced(h, None).tolist() == [True, True, True]
-    # the window carries its share of the platen force: 0.8 of it here
-    h["window_fz"] = [-0.8, -1.0, -0.5]
-    assert st.load_balanced(h, share=0.8).tolist() == [True, True, False]
+    # the whole surface against the platen: how the window's part of it shares the load is free
+    h["window_fz"] = [-0.1, -0.9, -1.9]
+    assert st.load_balanced(h).tolist() == [True, True, False]
 
 
 def test_efficiency_example():

@@ -188,3 +188,17 @@ def test_mean_theta_r_over_loaded_snapshots(real):
     loaded = s.loc[s["load_balanced"] & s["theta_r_surface_deg"].notna(), "theta_r_surface_deg"]
     assert summary.row["theta_r_surface_mean_deg"] == pytest.approx(loaded.mean(), rel=1e-12)
     assert min(loaded) < summary.row["theta_r_surface_mean_deg"] < max(loaded)
+
+
+def test_solid_fraction_of_a_square_lattice_is_pi_over_four():
+    from interphase.analysis.summary_stages import solid_fraction
+    from interphase.case import Case
+
+    case = Case(test="box", d50=0.7e-3, box_length_d50=20, box_height_d50=10)
+    s = case.d50 / 2                                   # pitch; grains of diameter s touch
+    i, k = np.meshgrid(np.arange(40), np.arange(20))
+    p = pd.DataFrame({"snapshot": 0, "x": (i.ravel() + 0.5) * s, "z": (k.ravel() + 0.5) * s, "radius": s / 2})
+    assert solid_fraction(case, p, 0) == pytest.approx(np.pi / 4, rel=1e-12)
+    # smaller grains: the top falls to 19.9 s, the rectangle to (4 s, 13.9 s) × (6 s, 34 s), 10 × 28 grains
+    assert solid_fraction(case, p.assign(radius=0.4 * s), 0) == pytest.approx(280 * np.pi * 0.16 / (28 * 9.9), rel=1e-9)
+    assert np.isnan(solid_fraction(case, p, 7))

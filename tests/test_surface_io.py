@@ -158,3 +158,16 @@ def test_stl_roundtrip_normals_up(tmp_path):
     n = np.cross(b - a, c - a)
     assert np.all(n[:, 2] > 0)
     assert m.points[:, 1].min() == pytest.approx(-0.5e-3) and m.points[:, 1].max() == pytest.approx(0.5e-3)
+
+
+def test_a_random_case_measures_the_surface_its_engine_shears():
+    # the deck's surface (Case.surface, with margins and the shear's travel) and the stretch the
+    # summary measures (Case.sheared_surface) come from one profile: same heights where they overlap
+    from interphase.case import Case
+
+    case = Case(profile=ProfileSpec.make("random", au=2, ar=0.5, rtmax=2, seed=3), box_length_d50=30,
+                shear_distance=4e-3, snapshot_every=1e-3)
+    whole, sheared = case.surface(), case.sheared_surface()
+    assert whole.x[0] == pytest.approx(-case.surface_margin) and whole.x[-1] >= case.box_length + 4e-3
+    assert sheared.x[0] == 0.0 and sheared.x[-1] == pytest.approx(case.box_length + 4e-3)
+    np.testing.assert_allclose(np.interp(sheared.x, whole.x, whole.z), sheared.z, atol=1e-15)

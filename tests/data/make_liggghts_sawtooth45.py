@@ -5,7 +5,7 @@ The case: 45° saw-tooth (Rt = D50, Sw = 2 D50), μs = 0.5, the study's well-gra
 0.35–1.05 mm: its Figures 6.3 and 6.8 are for it), 1800 grains in a 60 × 30 D50 box (longer than tall,
 so that the side walls take less of the shear; the 20 D50 sampling region fits), G = 50 MPa (soft, so
 that it runs in a minute), 4 mm of shear (at 3 mm its peak fell on the last snapshot, a ratio still
-rising), snapshots every 0.25 mm, packing seed 1.
+rising), snapshots every 0.25 mm, packing seed 1, the Case's default side walls (frictionless).
 Writes contacts/history/particles Parquet and case.json (the case and the engine parameters);
 the raw dumps are not kept (a few MB).
 """

@@ -118,10 +118,7 @@ def average_stress(contacts: pd.DataFrame, rect, snapshots=None, kinds=("pp", "p
 def trace_top(case) -> float:
     """Top of the particle centroid trace [m] of an interface case's profile in the engine frame:
     the highest profile point + D50/2 (a half-disk dilation tops out right over the highest point)."""
-    from interphase.surface.profiles import from_spec
-
-    prof = from_spec(case.profile, case.d50, case.box_length)
-    return float(np.max(prof.z)) + 0.5 * case.d50
+    return float(np.max(case.surface().z)) + 0.5 * case.d50
 
 
 def sampling_rectangle(case, z_bottom: float, soil_top: float | None = None,

@@ -64,7 +64,7 @@ ROW_KEYS = (
     "surface_force_angle_deg", "lee_share_surface", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
     "at_region", "stress_ratio_region", "qp_region", "qp_sff", "principal_stress_deg_region",
     "shear_band_d50", "inertial_number", "theta_a_deg_92", "theta_a_deg_90", "rn", "rnc",
-    "mean_slope_deg", "n_contacts_surface", "reasons",
+    "mean_slope_deg", "n_contacts_surface", "solid_fraction", "reasons",
 )
 
 
@@ -149,6 +149,9 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
 
     for k, v in checks(case, results).items():
         row.setdefault(k, v)
+    spec = stage.specimen(case, getattr(results, "particles", None))
+    row.update(spec.values)
+    reasons.update(spec.reasons)
 
     series = stage.series(hist, strength, window, peak, surface, region)
     mean = stage.mean_over_loaded(series, "theta_r_surface_deg")

@@ -90,8 +90,7 @@ def strength(case, hist: pd.DataFrame, window: float, max_load_mismatch: float |
     """Peak (smoothed over `window` m), raw maximum, residual, dilation and peak_at_end from History."""
     interface = case.test == "interface"
     ratio = st.surface_stress_ratio(hist) if interface else st.box_stress_ratio(hist)
-    x0, x1 = case.window
-    balanced = st.load_balanced(hist, max_load_mismatch, share=(x1 - x0) / case.box_length)
+    balanced = st.load_balanced(hist, max_load_mismatch)
     used = ratio.where(balanced)
     out = Strength(ratio=ratio, balanced=balanced, used=used)
     skipped = int((~balanced).sum())
@@ -282,6 +281,47 @@ def shear_band(case, particles, ps: PeakSnapshot, reg: Region) -> Stage:
     return out
 
 
+# ---- specimen ------------------------------------------------------------------------------------
+
+SPECIMEN_KEYS = ("solid_fraction", "solid_fraction_end")
+
+
+def solid_fraction(case, particles: pd.DataFrame, snapshot) -> float:
+    """Area of the grains' sections over the area they sit in [-] (2D: Σπr² of the grains whose
+    centres lie in the rectangle, over its area), in the engine frame at one snapshot. Rectangle:
+    3 D50 clear of each side wall; from 1 D50 above the surface's peaks (box: 2 D50 above the floor)
+    to 3 D50 below the soil's top (highest grain top), so that no boundary's looser layer counts."""
+    d = case.d50
+    p = particles[particles["snapshot"].to_numpy() == snapshot]
+    if p.empty:
+        return math.nan
+    r = p["radius"].to_numpy(float)
+    x, z = p["x"].to_numpy(float), p["z"].to_numpy(float)
+    x0, x1 = 3 * d, case.box_length - 3 * d
+    z0 = (float(np.max(case.surface().z)) + d) if case.test == "interface" else 2 * d
+    z1 = float(np.max(z + r)) - 3 * d
+    if not (x1 > x0 and z1 > z0):
+        return math.nan
+    inside = (x > x0) & (x < x1) & (z > z0) & (z < z1)
+    return float(np.pi * np.sum(r[inside] ** 2) / ((x1 - x0) * (z1 - z0)))
+
+
+def specimen(case, particles) -> Stage:
+    """The specimen's solid fraction at the start and at the end of the shear (engine frame:
+    the particle table as the engine wrote it)."""
+    out = Stage(values=dict.fromkeys(SPECIMEN_KEYS, math.nan))
+    if particles is None or particles.empty:
+        out.reasons = dict.fromkeys(SPECIMEN_KEYS, "no particle snapshots")
+        return out
+    snaps = np.sort(particles["snapshot"].unique())
+    out.values.update(solid_fraction=solid_fraction(case, particles, snaps[0]),
+                      solid_fraction_end=solid_fraction(case, particles, snaps[-1]))
+    for k, v in out.values.items():
+        if not math.isfinite(v):
+            out.reasons[k] = "the soil is shallower than its boundary layers (3 D50 + 1 D50)"
+    return out
+
+
 # ---- profile -------------------------------------------------------------------------------------
 
 def profile_features(case) -> Stage:
@@ -293,10 +333,11 @@ def profile_features(case) -> Stage:
     from interphase.surface.normals import theta_a_filters
     from interphase.surface.profiles import from_spec
 
-    # a saw-tooth is periodic: the trace of n periods is n copies of one period's, so θa, Rn, Rnc
-    # and the slope of one period are those of the box's profile, at 1/n of the cost
-    length = case.d50 if case.profile.kind == "sawtooth" else case.box_length
-    t = theta_a_filters(from_spec(case.profile, case.d50, length), case.d50, (92, 90))
+    # the surface the engine sheared (Case.sheared_surface); a saw-tooth is periodic: the trace of n
+    # periods is n copies of one period's, so one period gives the same θa, Rn, Rnc and slope at 1/n
+    # of the cost
+    prof = from_spec(case.profile, case.d50, case.d50) if case.profile.kind == "sawtooth" else case.sheared_surface()
+    t = theta_a_filters(prof, case.d50, (92, 90))
     t92, t90 = t[92], t[90]
     out.values.update(theta_a_deg_92=t92.theta_a_deg, theta_a_deg_90=t90.theta_a_deg, rn=t92.rn, rnc=t92.rnc,
                       mean_slope_deg=t92.mean_slope_deg)
