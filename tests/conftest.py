@@ -27,7 +27,8 @@ def need_binary(name: str) -> str:
 
 @pytest.fixture(scope="session")
 def quick_campaign(tmp_path_factory) -> Path:
-    """campaigns/quick.toml run for real (LIGGGHTS, 5 tiny cases) into a temporary output folder;
+    """campaigns/quick.toml with a smaller sweep (Rt/D50 0.5 and 1 at μs 0.2, seeds 1 and 2: 4
+    interface cases and their 2 box tests) run for real with LIGGGHTS into a temporary output folder;
     returns the path of the campaign file that points there. Run once per test session."""
     from interphase.cli import main
 
@@ -35,6 +36,7 @@ def quick_campaign(tmp_path_factory) -> Path:
     tmp = tmp_path_factory.mktemp("quick")
     text = (ROOT / "campaigns" / "quick.toml").read_text()
     toml = tmp / "quick.toml"
+    text = text.split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5, 1]\nfriction_ps = [0.2]\nseed = [1, 2]\n"
     toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
     assert main(["run", str(toml)]) == 0
     return toml

@@ -144,7 +144,7 @@ def test_cli_report_without_results_exit_2(tmp_path, capsys):
 
 @pytest.mark.liggghts
 def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
-    """The quick campaign run for real (LIGGGHTS, 5 tiny cases; conftest.quick_campaign), reported."""
+    """The quick campaign run for real (LIGGGHTS, 6 tiny cases; conftest.quick_campaign), reported."""
     capsys.readouterr()
     out = tmp_path / "report"
     code = main(["report", str(quick_campaign), "--out", str(out), "--lab", str(LAB), "--bootstrap", "20"])
@@ -155,3 +155,8 @@ def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
     assert list((tmp_path / "figures").glob("network_*.png"))
     co = pd.read_csv(tmp_path / "tables" / "correlations.csv")
     assert co["note"].str.startswith("no fit").all()       # 4 interface cases: nothing to fit, said so
+    # the seed ensembles: one row per surface, two seeds each side, E with its interval
+    ens = pd.read_csv(tmp_path / "tables" / "ensembles.csv")
+    assert len(ens) == 2 and (ens["seeds"] == 2).all() and (ens["box_seeds"] == 2).all()
+    assert ((ens["E_lo"] <= ens["E"]) & (ens["E"] <= ens["E_hi"])).all()
+    assert ((ens["tan_delta_lo"] < ens["tan_delta"]) & (ens["tan_delta"] < ens["tan_delta_hi"])).all()

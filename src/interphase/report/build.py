@@ -41,6 +41,7 @@ class ReportResult:
     warnings: list[str] = field(default_factory=list)
     fits: list = field(default_factory=list)
     points: pd.DataFrame | None = None
+    ensembles: pd.DataFrame | None = None     # one row per physical case (report.ensembles)
 
 
 def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
@@ -142,6 +143,16 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     if campaign is not None:
         tables += T.input_tables(campaign)
     tables += T.results_tables(points)
+    if store is not None:
+        from interphase.report.ensembles import ensemble_table
+
+        ens = ensemble_table(summaries, store, e_note=T.E_NOTE)
+        res.ensembles = ens
+        tables.append(T.ensembles_table(ens))
+        high = ens[pd.to_numeric(ens["E"], errors="coerce") > T.E_NOTE]
+        if len(high):
+            res.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
+                                "column of the ensembles table and docs/strength.md")
     tables.append(T.coefficient_table(fits))
     if lab_df is not None:
         from interphase.report.lab import compare
@@ -161,7 +172,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         paths = T.write_table(t, tdir, prov)
         res.files += paths
         table_entries.append({"title": t.title, "files": [p.relative_to(out).as_posix() for p in paths],
-                              "inline": t.name.startswith(("table_", "correlations", "lab_")),
+                              "inline": t.name.startswith(("table_", "correlations", "lab_", "ensembles")),
                               "html": _html_table(t.df)})
 
     # ---- figures

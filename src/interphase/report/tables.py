@@ -159,6 +159,19 @@ RESULT_COLUMNS = (
 )
 
 
+#: an efficiency above this gets a note in the tables: the interface is stronger than its soil's box test
+E_NOTE = 1.2
+
+
+def ensembles_table(df: pd.DataFrame) -> Table:
+    """The seed-ensemble table (report.ensembles.ensemble_table) as a report table."""
+    return Table("ensembles", "Seed ensembles: tan δ, tan φ and E at the peak and the critical state, 95 % intervals",
+                 df, ["Peak: the maximum of the seed-mean curve (smoothed over 0.5 D50), interval Student t over the "
+                      "seeds' values there; critical state: mean of the last 40 % of the shear, t interval; E: "
+                      "bootstrap of the ratio of seed means (docs/methods.md, Seed ensembles). θr: mean of the "
+                      "seeds' peak-snapshot θr at the surface (ψ, degrees from vertical), t interval."])
+
+
 def results_tables(points: pd.DataFrame) -> list[Table]:
     """One results table per group (interface cases; angles ψ in degrees; θa = 0 for non-dilative)."""
     pts = points.copy()
@@ -168,9 +181,15 @@ def results_tables(points: pd.DataFrame) -> list[Table]:
         cols = [(k, h) for k, h in RESULT_COLUMNS if k in g.columns]
         df = g.sort_values([c for c in ("friction_ps", "gradation", "label") if c in g.columns])[[k for k, _ in cols]]
         df.columns = [h for _, h in cols]
+        notes = ["Angles ψ, degrees from vertical (positive toward −x); θa = 0 marks a non-dilative surface."]
+        e = pd.to_numeric(g.get("efficiency", pd.Series(dtype=float)), errors="coerce")
+        if (e > E_NOTE).any():
+            notes.append(f"{int((e > E_NOTE).sum())} case(s) with E > {E_NOTE:g}: one seed's peak over its box test's "
+                         "rides both runs' fluctuations, and the interface box's side walls confine the soil above a "
+                         "rough surface beyond the box test's state (docs/strength.md). Read E from the seed "
+                         "ensembles table.")
         out.append(Table(f"results_{_safe(grp)}", f"Results, group {grp} ({len(df)} interface cases)",
-                         df.reset_index(drop=True),
-                         ["Angles ψ, degrees from vertical (positive toward −x); θa = 0 marks a non-dilative surface."]))
+                         df.reset_index(drop=True), notes))
     return out
 
 

@@ -1,0 +1,85 @@
+"""The report's seed-ensemble table: each physical case's tan δ, its paired box tests' tan φ and E,
+at the peak and at the critical state, each with its 95 % interval (analysis.ensemble).
+
+A physical case is a campaign group's case label without its seed (`…-s3`); its box tests are the
+pair_id rows of its seeds. Curves come from each finished case's series.parquet (shear_disp,
+stress_ratio: the window ratio of an interface test, the shear plane's of a box test).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from interphase.analysis.ensemble import ensemble_efficiency, ensemble_strength
+from interphase.analysis.strength import PEAK_WINDOW_D50
+
+COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_delta_cs",
+           "tan_delta_cs_lo", "tan_delta_cs_hi", "tan_phi", "tan_phi_lo", "tan_phi_hi", "tan_phi_cs", "tan_phi_cs_lo",
+           "tan_phi_cs_hi", "E", "E_lo", "E_hi", "E_cs", "E_cs_lo", "E_cs_hi", "theta_r_deg", "theta_r_lo",
+           "theta_r_hi", "theta_a_deg_92", "note")
+
+
+def physical_case(label: str) -> str:
+    """A case label without its packing seed."""
+    return re.sub(r"-s\d+$", "", str(label))
+
+
+def _curve(store, case_id: str):
+    try:
+        s = pd.read_parquet(store.case_folder(str(case_id)) / "series.parquet", columns=["shear_disp", "stress_ratio"])
+    except (OSError, ValueError, KeyError):
+        return None
+    return s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)
+
+
+def _mean_interval(values) -> tuple[float, float, float]:
+    v = np.asarray([x for x in values if x is not None and math.isfinite(x)], float)
+    if v.size == 0:
+        return math.nan, math.nan, math.nan
+    if v.size < 2:
+        return float(v[0]), math.nan, math.nan
+    half = stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size)
+    return float(v.mean()), float(v.mean() - half), float(v.mean() + half)
+
+
+def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd.DataFrame:
+    """One row per physical interface case (see the module doc); `note` says why a value is
+    missing, and flags E above `e_note` (an interface stronger than its soil's box test)."""
+    if summaries is None or summaries.empty or store is None:
+        return pd.DataFrame(columns=COLUMNS)
+    rows = summaries.assign(_case=summaries["label"].map(physical_case))
+    by_id = rows.set_index(rows["case_id"].astype(str))
+    iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
+    out = []
+    for (group, name), g in iface.groupby(["group", "_case"], sort=True):
+        d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
+        window = PEAK_WINDOW_D50 * d50
+        a = [c for c in (_curve(store, cid) for cid in g["case_id"]) if c is not None]
+        box_ids = [str(p) for p in g.get("pair_id", pd.Series(dtype=object)).dropna().unique() if str(p) in by_id.index]
+        b = [c for c in (_curve(store, cid) for cid in box_ids) if c is not None]
+        sa, sb = ensemble_strength(a, window), ensemble_strength(b, window)
+        e = ensemble_efficiency(a, b, window)
+        th = _mean_interval(pd.to_numeric(g.get("theta_r_surface_deg"), errors="coerce"))
+        notes = []
+        if not b:
+            notes.append("no finished box test: E undefined")
+        if len(a) < 3 or len(b) < 3:
+            notes.append("fewer than 3 seeds: wide or no interval")
+        if math.isfinite(e.peak) and e.peak > e_note:
+            notes.append(f"E > {e_note:g}: the interface box's side walls confine the soil above a rough surface "
+                         "beyond the box test's state (docs/strength.md)")
+        out.append(dict(group=group, case=name, seeds=sa.n_seeds, box_seeds=sb.n_seeds,
+                        tan_delta=sa.peak, tan_delta_lo=sa.peak_lo, tan_delta_hi=sa.peak_hi,
+                        tan_delta_cs=sa.critical, tan_delta_cs_lo=sa.critical_lo, tan_delta_cs_hi=sa.critical_hi,
+                        tan_phi=sb.peak, tan_phi_lo=sb.peak_lo, tan_phi_hi=sb.peak_hi, tan_phi_cs=sb.critical,
+                        tan_phi_cs_lo=sb.critical_lo, tan_phi_cs_hi=sb.critical_hi,
+                        E=e.peak, E_lo=e.peak_lo, E_hi=e.peak_hi, E_cs=e.critical, E_cs_lo=e.critical_lo,
+                        E_cs_hi=e.critical_hi, theta_r_deg=th[0], theta_r_lo=th[1], theta_r_hi=th[2],
+                        theta_a_deg_92=float(pd.to_numeric(g.get("theta_a_deg_92"), errors="coerce").median()),
+                        note="; ".join(notes)))
+    return pd.DataFrame(out, columns=COLUMNS)
