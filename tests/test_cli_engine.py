@@ -29,7 +29,9 @@ def test_render_then_run_case(tmp_path, capsys):
     assert main(["run-case", str(toml), "-o", str(tmp_path / "run"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     h = pd.read_parquet(out["history"])
-    assert len(h) > 50 and out["peak_stress_ratio"] > 0.3
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())["row"]
+    # the summary's peak (a tiny walled box: a smoke test, not a strength; docs/strength.md)
+    assert len(h) > 50 and out["peak_stress_ratio"] == summary["peak_stress_ratio"] > 0.15
 
 
 @pytest.mark.parametrize("extra,needle", [("frction_pp = 1", "did you mean 'friction_pp'"),
