@@ -226,3 +226,33 @@ def test_side_walls_clear_the_peaks_for_every_study_profile():
             for x0, z0, x1, z1 in walls:
                 assert min(z0, z1) > top, (name, c.label())
     assert len(seen) > 40
+
+
+def test_periodic_device_has_no_side_walls_and_a_toothed_platen():
+    saw = ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0)
+    case = Case(profile=saw, device="periodic", **SMALL)
+    dev = device_module.device(case)
+    L = case.box_length
+    assert dev.periodic and dev.fixed == () and dev.exits is None and dev.bed == ()
+    assert dev.bounds[:2] == (0.0, L) and dev.window[:2] == (0.0, L) and case.window == (0.0, L)
+    xs = [x for s in dev.moving for x in (s[0], s[2])]
+    assert min(xs) == 0.0 and max(xs) == pytest.approx(L)            # the surface is exactly [0, L]
+    tips = [s[3] for s in dev.platen[::2]]                             # teeth 1 D50 deep, pointing down
+    assert len(dev.platen) == 2 * round(L / (2 * case.d50)) and min(tips) < dev.platen_com[1] - 0.99 * case.d50
+    assert min(tips) > dev.packing.top                                 # and clear of the grains
+    assert dev.record("liggghts").period == L
+    box = device_module.device(Case(test="box", device="periodic", **SMALL))
+    bed = np.array(box.bed)
+    assert bed.size > 5 and np.allclose(box.packing.z[bed], box.packing.z.min())
+    floor = box.moving[0][1]
+    assert (box.packing.z[bed] - box.packing.diameter[bed] / 2 > floor).all()   # the bed rests above it
+
+
+def test_periodic_device_refuses_what_it_cannot_wrap():
+    with pytest.raises(InputError, match="box_length_d50") as e:
+        Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=3, sr=0), device="periodic", **SMALL)
+    assert "21" in e.value.fix                                          # 20 D50 is not whole 3 D50 periods
+    with pytest.raises(InputError, match="periodic surface"):
+        Case(profile=ProfileSpec.make("random", au=2, ar=1, rtmax=2, seed=1), device="periodic", **SMALL)
+    with pytest.raises(InputError, match="YADE"):
+        Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))

@@ -75,6 +75,36 @@ def test_box_peak_in_range(run):
     assert 0.4 <= peak_ratio(box.history) <= 0.9
 
 
+PERIODIC = dict(device="periodic", friction_ps=0.5)
+
+
+def test_periodic_device_shears_without_walls(run):
+    # x periodic: the surface force carries the platen's whole load, no grain is lost, the surface
+    # wraps (grains near x = L still rest on it after 2 mm), contacts across the boundary are unwrapped
+    saw = ("sawtooth", dict(rt=1.0, sw=2.0, sr=0.0))
+    folder, res = run(tiny(profile=saw, **PERIODIC))
+    h = res.history[res.history.shear_disp > 0.2e-3]
+    assert (-h.surface_fz / h.normal_force.abs()).mean() == pytest.approx(1.0, abs=0.03)
+    last = res.particles[res.particles.snapshot == res.particles.snapshot.max()]
+    assert len(last) == 200 and last.x.between(0, 20 * 0.7e-3).all()
+    assert last[last.x > 18 * 0.7e-3].z.min() > 0.1e-3          # resting on teeth, not fallen through
+    c = res.contacts
+    assert (np.hypot(c.x2 - c.x1, c.z2 - c.z1) < 1.05e-3).all()  # no branch spans the box
+    assert not (folder / "sides.stl").exists() and not (folder / "balance.txt").exists()
+    # a flat at μs 0.2 slides at μs, as between walls
+    _, flat = run(tiny(**(PERIODIC | dict(friction_ps=0.2))))
+    assert steady_ratio(flat.history) == pytest.approx(0.2, abs=0.02)
+
+
+def test_periodic_soil_bed_loads_its_surface(run):
+    # the soil's own test in the periodic device: a frozen bed of its grains on a moving floor; the
+    # bed and floor carry the platen's load and resist the shear like a rough surface
+    _, res = run(tiny(test="box", **PERIODIC))
+    h = res.history[res.history.shear_disp > 0.2e-3]
+    assert (-h.surface_fz / h.normal_force.abs()).mean() == pytest.approx(1.0, abs=0.03)
+    assert 0.2 < (h.surface_fx / -h.surface_fz).mean() < 0.8
+
+
 def test_tables_follow_the_contract(run):
     folder, res = run(tiny(friction_ps=0.2))
     assert tuple(res.contacts.columns) == CONTACT_COLUMNS

@@ -23,6 +23,7 @@ from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
 
 TESTS = ("interface", "box")
+DEVICES = ("walled", "periodic")
 WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each side wall (Case.window)
 
 
@@ -50,6 +51,8 @@ class Case:
     box_height_d50: float = 20.0            # soil height above the surface [D50]
     n_grains: int | None = None             # None: fill the box to box_height_d50
     seed: int = 1                           # packing seed
+    device: str = "walled"                  # "walled": soil box between side walls (the study's);
+                                            # "periodic": x periodic over the box length, no side walls
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
 
     def __post_init__(self):
@@ -58,6 +61,8 @@ class Case:
 
         if self.test not in TESTS:
             bad("test", f"unknown test {self.test!r}", f"use one of {', '.join(TESTS)}")
+        if self.device not in DEVICES:
+            bad("device", f"unknown device {self.device!r}", f"use one of {', '.join(DEVICES)}")
         if self.test == "interface" and self.profile is None:
             bad("profile", "an interface test needs a surface profile", "give profile = {kind = 'flat'} or another")
         if self.test == "box" and self.profile is not None:
@@ -92,7 +97,9 @@ class Case:
             bad("n_grains", f"must be an integer ≥ 2 or omitted, got {self.n_grains!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int):
             bad("seed", f"must be an integer, got {self.seed!r}")
-        if self.test == "interface" and self.box_length_d50 < 4 * WALL_ZONE_D50:
+        if self.periodic and self.test == "interface":
+            self._check_periodic_surface(bad)
+        if self.test == "interface" and not self.periodic and self.box_length_d50 < 4 * WALL_ZONE_D50:
             bad("box_length_d50", f"{self.box_length_d50!r} leaves less than half the box to measure in "
                 f"({WALL_ZONE_D50:g} D50 next to each side wall are left out)", f"use ≥ {4 * WALL_ZONE_D50:g}")
         if self.snapshot_every > self.shear_distance:
@@ -101,7 +108,27 @@ class Case:
         if self.d50 < self.gradation.d_min or self.d50 > self.gradation.d_max:
             bad("d50", f"{self.d50!r} m lies outside the gradation {self.gradation.d_min}–{self.gradation.d_max} m")
 
+    def _check_periodic_surface(self, bad) -> None:
+        """A periodic device wraps the surface over the box length: it must repeat with it."""
+        kind = self.profile.kind
+        if kind == "flat":
+            return
+        if kind != "sawtooth":
+            bad("device", f"the periodic device needs a periodic surface; a {kind} profile is not one",
+                "use device = 'walled' for random and measured profiles, or a flat or saw-tooth surface")
+        period = self.profile.param("sw") + self.profile.param("sr")
+        n = self.box_length_d50 / period
+        if abs(n - round(n)) > 1e-9 * n or round(n) < 1:
+            bad("box_length_d50", f"{self.box_length_d50:g} D50 is not a whole number of the saw-tooth's "
+                f"{period:g} D50 periods, so the periodic surface would not close",
+                f"use box_length_d50 = {max(1, round(n)) * period:g} (or another multiple of {period:g})")
+
     # ---- derived ---------------------------------------------------------------------------
+    @property
+    def periodic(self) -> bool:
+        """x periodic over the box length (no side walls)."""
+        return self.device == "periodic"
+
     @property
     def box_length(self) -> float:
         """Soil box length [m]."""
@@ -120,11 +147,14 @@ class Case:
 
     def surface(self):
         """The whole rough surface of an interface test in the engine frame at the start of the
-        shear [m]: from x = −surface_margin to beyond L + shear_distance + surface_margin (it slides
-        −x by shear_distance beneath the box [0, L]). The one profile object of the case: the
-        engines build their meshes from it, the analysis measures it (`sheared_surface`)."""
+        shear [m]: walled device, from x = −surface_margin to beyond L + shear_distance +
+        surface_margin (it slides −x by shear_distance beneath the box [0, L]); periodic device,
+        exactly [0, L] (the engine wraps it). The one profile object of the case: the engines build
+        their meshes from it, the analysis measures it (`sheared_surface`)."""
         from interphase.surface.profiles import Profile, from_spec
 
+        if self.periodic:       # exactly [0, L]: the engine wraps it as it slides
+            return from_spec(self.profile, self.d50, self.box_length)
         m = self.surface_margin
         prof = from_spec(self.profile, self.d50, self.box_length + self.shear_distance + 2 * m)
         return Profile(prof.x - m, prof.z, prof.periodic, prof.name)
@@ -147,7 +177,7 @@ class Case:
         (surface → grain → wall) never passes through the soil; on a 45° saw-tooth it made the
         whole-surface ratio peak at 1.27 where the window's peaked at 0.72 (1000 grains,
         docs/liggghts.md). A departure from docs/methods.md, which takes [0, L]. Box tests: [0, L]."""
-        if self.test != "interface":
+        if self.test != "interface" or self.periodic:
             return (0.0, self.box_length)
         return (WALL_ZONE_D50 * self.d50, self.box_length - WALL_ZONE_D50 * self.d50)
 
@@ -176,7 +206,8 @@ class Case:
             return self.name
         surface = self.profile.label() if self.profile else "box"
         grading = "user" if self.gradation.sizes else self.gradation.name
-        return f"{self.test}-{surface}-mu{self.friction_ps:g}-{grading}-s{self.seed}"
+        test = f"{self.test}-periodic" if self.periodic else self.test
+        return f"{test}-{surface}-mu{self.friction_ps:g}-{grading}-s{self.seed}"
 
     def replace(self, **changes) -> "Case":
         return dataclasses.replace(self, **changes)

@@ -47,6 +47,8 @@ class Recipe:
     servo_speed: float = 0.1
     servo_band: float = 0.1
     rolling_model: str = "epsd2"         # LIGGGHTS rolling friction model (YADE: its elastic–plastic law)
+    platen_tooth_d50: float = 1.0        # periodic device: the platen's teeth [D50] (Rt/D50 1 and 3
+                                         # surfaces failed in the soil under it: docs/strength.md)
     typical_overlap: float = 0.003       # δ/D50 that sizes YADE's rolling stiffness krot
     # timeout estimate: timeout_base + timeout_factor × steps × grains / throughput [s]
     timeout_base: float = 60.0
@@ -101,6 +103,7 @@ class RunRecord:
     window: tuple[float, float, float] | None
     steps: Steps
     recipe: Recipe | None = None
+    period: float | None = None  # [m] x period of a periodic device (contacts across it are unwrapped)
 
     def to_json(self) -> str:
         data = dataclasses.asdict(self)

@@ -47,15 +47,17 @@ class Device:
     skin: float                        # neighbour-list skin [m]
     wall_reach: float                  # walls span |y| ≤ this [m], beyond any grain
     moving: tuple[Segment, ...]        # the moving wall group (interface: the surface's segments)
-    fixed: tuple[Segment, ...]         # interface: side walls; box: the upper half
-    exits: tuple[Segment, ...] | None  # interface: the planes x = 0 and x = L, full height
-    platen: Segment
+    fixed: tuple[Segment, ...]         # walled interface: side walls; walled box: the upper half
+    exits: tuple[Segment, ...] | None  # walled interface: the planes x = 0 and x = L, full height
+    platen: tuple[Segment, ...]        # flat (walled) or a saw-tooth with teeth down (periodic)
     platen_com: tuple[float, float]    # (x, z) of the platen's centre [m]
     platen_force: float                # target [N], σ·L·t
     bounds: tuple[float, float, float, float]   # (x_lo, x_hi, z_lo, z_hi): a grain outside is lost
     window: tuple[float, float, float] | None   # (x0, x1, z_top) measuring window; box: None
     packing: Packing
     steps: Steps
+    periodic: bool = False             # x periodic over [x_lo, x_hi] = [0, L]
+    bed: tuple[int, ...] = ()          # periodic box: grains (packing indices) frozen to the moving floor
 
     shear_sign = 1
 
@@ -66,6 +68,8 @@ class Device:
     @property
     def wall_names(self) -> tuple[str, str]:
         """Names of the moving and the fixed wall group."""
+        if self.periodic:
+            return ("surface", "sides") if self.test == "interface" else ("floor", "sides")
         return ("surface", "sides") if self.test == "interface" else ("lower", "upper")
 
     @property
@@ -92,7 +96,8 @@ class Device:
         """What recipe.json states about a run of this device by `engine`."""
         return RunRecord(engine=engine, test=self.test, dt=self.dt, shear_velocity=self.case.shear_velocity,
                          shear_sign=self.shear_sign, thickness=self.thickness, n_grains=self.n_grains,
-                         platen_force=self.platen_force, window=self.window, steps=self.steps, recipe=self.recipe)
+                         platen_force=self.platen_force, window=self.window, steps=self.steps, recipe=self.recipe,
+                         period=self.case.box_length if self.periodic else None)
 
 
 def time_step(case: Case, recipe: Recipe = RECIPE) -> float:
@@ -125,6 +130,8 @@ def step_counts(case: Case, dt: float, recipe: Recipe = RECIPE) -> Steps:
 def device(case: Case, recipe: Recipe = RECIPE) -> Device:
     """The device of `case` (cached: both engines rendering one case share it; do not mutate its
     arrays)."""
+    if case.periodic:
+        return _periodic(case, recipe)
     d_min, d_max = case.gradation.d_min, case.gradation.d_max
     L, D = case.box_length, case.shear_distance
     margin = case.surface_margin
@@ -136,7 +143,7 @@ def device(case: Case, recipe: Recipe = RECIPE) -> Device:
         pack = lattice_packing(case, 0.0, L, top + 0.02 * d_max)
         wall_top = pack.top + 3 * d_max
         z_lo = float(z.min()) - d_max
-        moving = tuple(zip(x[:-1].tolist(), z[:-1].tolist(), x[1:].tolist(), z[1:].tolist()))
+        moving = _segments(x, z)
         fixed = tuple(tuple(s) for s in side_walls(prof, L, d_min, d_max, case.d50, wall_top))
         exits = ((0.0, z_lo, 0.0, wall_top), (L, wall_top, L, z_lo))
         x_lo, x_hi = float(x.min()) - D - d_max, float(x.max()) + d_max     # the surface travels −D
@@ -156,15 +163,57 @@ def device(case: Case, recipe: Recipe = RECIPE) -> Device:
                  (0.0, z_mid, -far, z_mid))                   # left flange (faces up)
         z_lo = -d_max
         x_lo, x_hi = -far - D - d_max, L + far + d_max
-    for a in (pack.x, pack.z, pack.diameter):     # shared through the cache: read-only
-        a.flags.writeable = False
     platen_z = pack.top + 0.5 * d_max
     inset = 0.02 * d_max
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=0.45 * d_max * 2,
                   moving=moving, fixed=fixed, exits=exits,
-                  platen=(L - inset, platen_z, inset, platen_z), platen_com=(L / 2, platen_z),
+                  platen=((L - inset, platen_z, inset, platen_z),), platen_com=(L / 2, platen_z),
                   platen_force=case.normal_stress * L * case.thickness, bounds=(x_lo, x_hi, z_lo, wall_top + 2 * d_max),
                   window=window, packing=pack, steps=step_counts(case, dt, recipe))
+
+
+def _segments(x, z) -> tuple[Segment, ...]:
+    return tuple(zip(x[:-1].tolist(), z[:-1].tolist(), x[1:].tolist(), z[1:].tolist()))
+
+
+def _periodic(case: Case, recipe: Recipe) -> Device:
+    """The wall-free device: x periodic over [0, L], no side walls, so nothing jams at an edge and
+    the surface's shear force equals the platen's (exact equilibrium, no measuring window needed).
+      interface: the surface is exactly [0, L] (a periodic profile, whole periods), sliding −x;
+        the engines wrap it across the boundary;
+      box (the soil's own test in this device): a bed of the soil's own grains — the lowest
+        lattice row, frozen — rides −x on a flat floor just below it, so the soil shears against
+        itself and its failure lies in the soil whatever a surface would do.
+    Top: a saw-tooth platen, teeth of platen_tooth_d50·D50 pointing down at about 2 D50 spacing (a
+    whole number over L), servo-held at σ·L·t: rough enough that the soil, not the platen, fails
+    (docs/strength.md)."""
+    d_max = case.gradation.d_max
+    L, d50 = case.box_length, case.d50
+    dt = time_step(case, recipe)
+    bed: tuple[int, ...] = ()
+    if case.test == "interface":
+        prof = case.surface()
+        top, z_lo = float(prof.z.max()), float(prof.z.min()) - d_max
+        pack = lattice_packing(case, 0.0, L, top + 0.02 * d_max)
+        moving = _segments(prof.x, prof.z)
+        window = (0.0, L, top + d_max)
+    else:
+        pack = lattice_packing(case, 0.0, L, 0.0)
+        lowest = np.isclose(pack.z, pack.z.min())
+        bed = tuple(int(i) for i in np.flatnonzero(lowest))
+        floor = float(np.min(pack.z[lowest] - pack.diameter[lowest] / 2)) - 0.01 * d50
+        moving, window, z_lo = ((0.0, floor, L, floor),), None, floor - d_max
+    h = recipe.platen_tooth_d50 * d50
+    n = max(1, round(L / (2 * d50)))
+    base = pack.top + 0.5 * d_max + h          # the tips clear the highest grain by d_max/2
+    xs = np.linspace(L, 0.0, 2 * n + 1)        # right to left: the platen faces down
+    zs = np.where(np.arange(2 * n + 1) % 2 == 1, base - h, base)
+    return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * case.gradation.d_min,
+                  wall_reach=0.45 * d_max * 2, moving=moving, fixed=(), exits=None,
+                  platen=_segments(xs, zs), platen_com=(L / 2, base),
+                  platen_force=case.normal_stress * L * case.thickness,
+                  bounds=(0.0, L, z_lo, base + 3 * d_max), window=window, packing=pack,
+                  steps=step_counts(case, dt, recipe), periodic=True, bed=bed)
 
 
 def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:

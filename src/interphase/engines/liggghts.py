@@ -50,7 +50,8 @@ def mesh_files(dev: Device) -> dict[str, str]:
     """The device's walls as ASCII STL, each segment extruded over |y| ≤ wall_reach as two triangles.
     LIGGGHTS joins triangles at shared vertices, so the surface is one connected mesh: a ridge vertex
     meets a grain once (a mesh split into in-plane triangles gave duplicate contacts there)."""
-    walls = dict(zip(dev.wall_names, (dev.moving, dev.fixed)), platen=[dev.platen])
+    walls = dict(zip(dev.wall_names, (dev.moving, dev.fixed)), platen=dev.platen)
+    walls = {name: segs for name, segs in walls.items() if segs}
     if dev.exits:
         walls |= {"exit_left": dev.exits[:1], "exit_right": dev.exits[1:]}
     return {f"{name}.stl": stl_text(*segment_triangles(segs, -dev.wall_reach, dev.wall_reach))
@@ -66,7 +67,9 @@ def deck_values(dev: Device) -> dict:
     vmax, kp = platen_servo(dev)
     lo, hi = dev.platen_band
     moving, fixed = (MESH.get(n, n) for n in dev.wall_names)
-    return dict(
+    return dict(periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
+                moving_file=f"{dev.wall_names[0]}.stl",
+                bed=[i + 1 for i in dev.bed],                                  # LIGGGHTS atom ids
         version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
         E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=[case.restitution] * 16,
         friction=grain_with + [v for mu in grain_with[1:] for v in (mu, 0.0, 0.0, 0.0)],   # symmetric 4 × 4
@@ -95,6 +98,9 @@ class Liggghts(Engine):
         return {"in.deck": environment(self.templates).get_template(self.template_name(case)).render(**values),
                 **mesh_files(dev), "grains.data": write_liggghts_data(dev.packing, case.density, box),
                 "engine.json": json.dumps(meta, indent=1, default=float), RECIPE_FILE: dev.record(self.name).to_json()}
+
+    def template_name(self, case: Case) -> str:
+        return "periodic_shear.in.j2" if case.periodic else super().template_name(case)
 
     def arguments(self, binary: str) -> list[str]:
         stdbuf = shutil.which("stdbuf")

@@ -74,7 +74,11 @@ def driver_input(dev: Device) -> dict:
     case, r, s = dev.case, dev.recipe, dev.steps
     p = dev.packing
     lo, hi = dev.platen_band
-    walls = [*zip(dev.wall_names, (dev.moving, dev.fixed)), ("platen", [dev.platen])]
+    if dev.periodic:
+        from interphase.errors import InputError
+        raise InputError("the periodic device is not built for YADE yet", where="case.device",
+                         fix="run it with LIGGGHTS, or use device = 'walled' for a cross-check (docs/strength.md)")
+    walls = [*zip(dev.wall_names, (dev.moving, dev.fixed)), ("platen", list(dev.platen))]
     return dict(
         version=__version__, test=case.test, dt=dev.dt, gravity=r.gravity,
         material=contact_parameters(case, r.typical_overlap),

@@ -93,7 +93,7 @@ def _meta(folder: Path) -> dict:
     rec = read_record(folder)
     start = folder / "shear_start.txt"
     n0 = int(float(start.read_text().split()[0])) if start.exists() else rec.steps.n_consolidate
-    return {"dt": rec.dt, "shear_velocity": rec.shear_velocity, "shear_start": n0}
+    return {"dt": rec.dt, "shear_velocity": rec.shear_velocity, "shear_start": n0, "period": rec.period}
 
 
 def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
@@ -122,6 +122,11 @@ def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -
         f2 = -_cols(df, prefix, 10, 12)         # the dump gives the force on i; body 2 = j
         kind = np.zeros(len(df), np.int8)
         cpt = _cols(df, prefix, 21, 23)
+    if meta.get("period"):
+        # x periodic: the dump gives each body's position inside [0, L]; a contact across the
+        # boundary is between one body and the other's image, so bring body 2 to that image
+        p2 = p2.copy()
+        p2[:, 0] -= meta["period"] * np.round((p2[:, 0] - p1[:, 0]) / meta["period"])
     branch = p2 - p1
     nrm = np.hypot(branch[:, 0], branch[:, 2])
     with np.errstate(invalid="ignore", divide="ignore"):
