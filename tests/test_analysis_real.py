@@ -86,3 +86,10 @@ def test_summed_surface_force_angle_against_the_dumps_and_the_engine(row):
     k = int(np.argmin(np.abs(h.shear_disp.to_numpy() - row["peak_snapshot_shear_disp"])))
     engine = math.degrees(math.atan(h.window_fx.iloc[k] / -h.window_fz.iloc[k]))
     assert row["surface_force_angle_deg"] == pytest.approx(engine, abs=0.5)
+
+
+def test_no_grain_jams_and_the_specimen_density_is_reported(row):
+    """Max overlap over every contact of the run: 0.095 D50 on this fixture (jams at a wall's edge
+    reached 0.1–0.2 D50, docs/strength.md); solid fraction at the start of shear 0.829."""
+    assert row["max_overlap_d50"] < 0.1
+    assert 0.80 < row["solid_fraction"] < 0.86 and 0.78 < row["solid_fraction_end"] < 0.86

@@ -149,7 +149,7 @@ def summarise(case, results, *, shear_sign: int = 1, window: float | None = None
 
     for k, v in checks(case, results).items():
         row.setdefault(k, v)
-    spec = stage.specimen(case, getattr(results, "particles", None))
+    spec = stage.specimen(case, getattr(results, "particles", None), frame.contacts)
     row.update(spec.values)
     reasons.update(spec.reasons)
 
