@@ -30,6 +30,10 @@ CASES = {
     # the 45° saw-tooth with well-graded grains: the left wall's gap differs from the right's
     "sawtooth45": Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), gradation=Gradation("poly"), **SMALL),
     "box": Case(test="box", **SMALL),
+    # x periodic, no side walls, a saw-tooth platen; the box test is the soil against a frozen bed
+    "periodic_sawtooth": Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), device="periodic", **SMALL),
+    "periodic_flat": Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL),
+    "periodic_box": Case(test="box", device="periodic", **SMALL),
 }
 
 
@@ -61,14 +65,15 @@ def liggghts_device(files: dict) -> dict:
         assert m, pattern
         return [cast(g) for g in m.groups()] if len(m.groups()) > 1 else cast(m.group(1))
     runs = [int(n) for n in re.findall(r"^run\s+(\d+)", deck, re.MULTILINE)]
-    interface = "sides.stl" in files
-    moving, reach = stl_segments(files["surface.stl" if interface else "lower.stl"])
-    fixed, _ = stl_segments(files["sides.stl" if interface else "upper.stl"])
+    interface = "surface.stl" in files
+    moving, reach = stl_segments(files[next(f for f in ("surface.stl", "lower.stl", "floor.stl") if f in files)])
+    fixed = next((stl_segments(files[f])[0] for f in ("sides.stl", "upper.stl") if f in files), [])
     platen, _ = stl_segments(files["platen.stl"])
     data = files["grains.data"]
     xlo, xhi = (float(s) for s in re.search(r"^(\S+) (\S+) xlo xhi", data, re.MULTILINE).groups())
     zlo, zhi = (float(s) for s in re.search(r"^(\S+) (\S+) zlo zhi", data, re.MULTILINE).groups())
     atoms = np.loadtxt(data.split("Atoms\n\n", 1)[1].splitlines(), ndmin=2)
+    bed = re.search(r"^group bed id ([\d ]+)$", deck, re.MULTILINE)
     com_x, com_z, force = find(r"servo file platen\.stl type 3 com (\S+) 0\.0 (\S+) ctrlPV force .* target_val (\S+)")
     out = dict(
         moving=moving, fixed=fixed, platen=platen, reach=reach, platen_com=(com_x, com_z), platen_force=-force,
@@ -80,9 +85,10 @@ def liggghts_device(files: dict) -> dict:
                    n_snapshot=find(r"^dump dpc all local (\d+)", int), n_history=find(r"^fix hist all print (\d+)", int)),
         bounds=(xlo, xhi, zlo, zhi), grains=atoms[:, [4, 6, 2]] * [1, 1, 0.5],          # x, z, radius
         window=tuple(find(r"^variable win atom \(x>(\S+)\)\*\(x<(\S+)\)\*\(z<(\S+)\)")) if interface else None,
-        exits=None,
+        exits=None, period=xhi - xlo if re.search(r"^boundary\s+p f f", deck, re.MULTILINE) else None,
+        bed=[int(i) - 1 for i in bed.group(1).split()] if bed else [],          # LIGGGHTS atom ids from 1
     )
-    if interface:
+    if "exit_left.stl" in files:
         out["exits"] = [stl_segments(files[f"exit_{side}.stl"])[0][0][0] for side in ("left", "right")]
     return out
 
@@ -92,14 +98,15 @@ def yade_device(files: dict) -> dict:
     p = json.loads(files["params.json"])
     walls = {w["index"]: facet_segments(w["triangles"]) for w in p["walls"]}
     platen = walls[2][0]
+    xs = [x for s in platen for x in (s[0], s[2])]
     g = p["grains"]
     return dict(
-        moving=walls[0][0], fixed=walls[1][0], platen=platen, reach=walls[0][1],
-        platen_com=(0.5 * (platen[0][0] + platen[0][2]), platen[0][1]), platen_force=p["platen_force"],
+        moving=walls[0][0], fixed=walls.get(1, ([], 0))[0], platen=platen, reach=walls[0][1],
+        platen_com=(0.5 * (min(xs) + max(xs)), p["platen_z"]), platen_force=p["platen_force"],
         platen_band=(p["platen_force_lo"], p["platen_force_hi"]), dt=p["dt"], skin=None,
         shear_velocity=p["shear_velocity"], steps={k: p["steps"][k] for k in p["steps"]},
         bounds=tuple(p["bounds"]), grains=np.column_stack([g["x"], g["z"], g["r"]]),
-        window=tuple(p["window"]) if p["window"] else None, exits=p["exits"],
+        window=tuple(p["window"]) if p["window"] else None, exits=p["exits"], period=p["period"], bed=p["bed"],
     )
 
 
@@ -112,7 +119,7 @@ def test_both_engines_render_one_device(name):
     assert device_module.device.cache_info().misses == 1       # computed once for both engines
     lig, yade = liggghts_device(lig_files), yade_device(yade_files)
     for key in ("moving", "fixed", "platen", "reach", "platen_force", "platen_band", "dt", "shear_velocity",
-                "steps", "bounds", "window", "exits"):
+                "steps", "bounds", "window", "exits", "period", "bed"):
         assert lig[key] == yade[key], key          # exact: both write full float precision
     assert lig["platen_com"][1] == yade["platen_com"][1] == lig["platen"][0][1]          # platen z
     assert lig["platen_com"][0] == pytest.approx(yade["platen_com"][0], rel=1e-15)        # its centre
@@ -127,7 +134,17 @@ def test_both_engines_render_one_device(name):
     assert lig_rec.pop("engine") == "liggghts" and yade_rec.pop("engine") == "yade"
     assert lig_rec == yade_rec
     assert lig_rec["steps"] == s and lig_rec["dt"] == lig["dt"] and lig_rec["n_grains"] == len(lig["grains"])
-    if case.test == "interface":
+    if case.periodic:
+        # no side walls or exits; x periodic over the box, which the surface spans exactly
+        L = case.box_length
+        assert lig["fixed"] == [] and lig["exits"] is None and lig["period"] == yade["period"] == L
+        assert min(x for s in yade["moving"] for x in (s[0], s[2])) == 0.0
+        assert max(x for s in yade["moving"] for x in (s[0], s[2])) == pytest.approx(L, rel=1e-15)
+        assert (lig["bed"] != []) == (case.test == "box")
+        assert lig["window"] == (yade["window"] if case.test == "box" else (0.0, L, lig["window"][2]))
+        assert json.loads(yade_files["recipe.json"])["period"] == L
+        assert "periodic" in yade_files["driver.py"]
+    elif case.test == "interface":
         # side-wall gaps above the surface's highest point: the right wall 0.05·d_min, the left one
         # the valley gap (wider on the 45° saw-tooth), the same in both engines
         top = max(max(z0, z1) for _, z0, _, z1 in yade["moving"])
@@ -254,5 +271,6 @@ def test_periodic_device_refuses_what_it_cannot_wrap():
     assert "21" in e.value.fix                                          # 20 D50 is not whole 3 D50 periods
     with pytest.raises(InputError, match="periodic surface"):
         Case(profile=ProfileSpec.make("random", au=2, ar=1, rtmax=2, seed=1), device="periodic", **SMALL)
-    with pytest.raises(InputError, match="YADE"):
-        Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))
+    # YADE builds it (engines/yade_driver.py): it renders without refusal
+    files = Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))
+    assert json.loads(files["params.json"])["period"] == 20 * 0.7e-3

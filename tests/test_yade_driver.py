@@ -43,6 +43,22 @@ def test_window_and_bounds_are_open_intervals():
     assert drv.in_bounds(0.0, 0.0, (-1, 1, -1, 1)) and not drv.in_bounds(0.0, 1.0, (-1, 1, -1, 1))
 
 
+def test_periodic_x_is_wrapped_into_the_period():
+    assert drv.wrap(-0.25, 1.0) == 0.75 and drv.wrap(1.0, 1.0) == 0.0 and drv.wrap(0.5, 1.0) == 0.5
+    assert drv.wrap(-0.25, None) == -0.25                  # walled device: positions as they are
+
+
+def test_long_facets_are_split_for_the_periodic_cell():
+    """No body may span half of YADE's periodic cell: a flat [0, L] facet becomes 4 of L/4, each an
+    in-plane triangle with its apex over its own midpoint; short facets are kept."""
+    flat = [[0.0, 0.0, 0.1, 1.0, 0.0, 0.1, 0.5, 0.2, 0.1]]
+    out = drv.split_facets(flat, 0.25)
+    assert len(out) == 4 and out[0] == [0.0, 0.0, 0.1, 0.25, 0.0, 0.1, 0.125, 0.2, 0.1]
+    assert [t[3] for t in out] == [0.25, 0.5, 0.75, 1.0]
+    tooth = [[0.0, 0.0, 0.0, 0.1, 0.0, 0.1, 0.05, 0.2, 0.05]]
+    assert drv.split_facets(tooth, 0.25) == tooth
+
+
 def test_rows_match_their_headers():
     v = (1.0, 0.0, 2.0)
     rows = {drv.CONTACT_HEADER: drv.contact_row(7, 1, 2, v, v, v, 1e-6, v, v),

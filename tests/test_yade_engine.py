@@ -297,3 +297,56 @@ def test_facet_contacts_carry_the_liggghts_wall_rolling_law(yrun):
     assert rolling["kr_wall"] == pytest.approx(p["krot_wall"]) and p["krot_wall"] > 4 * p["krot"]
     assert rolling["facet_contacts"] > 10
     assert rolling["matched"] >= 0.9 * rolling["facet_contacts"]
+
+
+# ---- the periodic device (engines/device.py `_periodic`), as tests/test_liggghts.py's periodic tests
+PERIODIC = dict(device="periodic", friction_ps=0.5, shear_distance=1.5e-3)
+
+
+def crossing(folder) -> int:
+    """Raw contacts.csv rows whose bodies sit on opposite sides of the x boundary (x written in
+    [0, L); a wall contact's body 1 is its contact point)."""
+    raw = pd.read_csv(folder / "contacts.csv")
+    first_wall = min(w[0] for w in json.loads((folder / "bodies.json").read_text())["walls"])   # after the grains
+    x1 = np.where(raw.b1 >= first_wall, raw.cx, raw.x1)
+    return int((np.abs(raw.x2 - x1) > 20 * 0.7e-3 / 2).sum())
+
+
+def test_periodic_device_shears_without_walls(yrun):
+    # x periodic: the surface force carries the platen's whole load, no grain is lost, the surface
+    # wraps (grains near x = L still rest on its teeth), contacts across the boundary are unwrapped
+    case = tiny(profile=SAW, **PERIODIC)
+    folder, res = yrun(case)
+    h = res.history[res.history.shear_disp > 0.2e-3]
+    assert (-h.surface_fz / h.normal_force.abs()).mean() == pytest.approx(1.0, abs=0.03)
+    assert h.normal_force.mean() == pytest.approx(case.normal_stress * case.box_length * case.thickness, rel=0.03)
+    assert (h.window_fx == h.surface_fx).all() and (h.window_fz == h.surface_fz).all()     # no window
+    last = res.particles[res.particles.snapshot == res.particles.snapshot.max()]
+    assert len(last) == 200 and last.x.between(0, case.box_length).all()
+    assert last[last.x > 18 * 0.7e-3].z.min() > 0.1e-3          # resting on teeth, not fallen through
+    c = res.contacts
+    assert crossing(folder) > 0                                   # some contacts do cross x = 0 / L
+    assert (np.hypot(c.x2 - c.x1, c.z2 - c.z1) < 1.05e-3).all()  # no branch spans the box
+    assert set(c[c.kind != "pp"].id1.unique()) <= {-1, -2}        # surface, platen: no side walls
+    assert len(json.loads((folder / "bodies.json").read_text())["walls"]) == 2
+    # a flat at μs 0.2 slides at μs, as between walls
+    _, flat = yrun(tiny(**(PERIODIC | dict(friction_ps=0.2))))
+    assert steady_ratio(flat.history) == pytest.approx(0.2, abs=0.02)
+
+
+def test_periodic_soil_bed_loads_its_surface(yrun):
+    # the soil's own test in the periodic device: a frozen bed of its grains on a moving floor; the
+    # bed and floor carry the platen's load and resist the shear like a rough surface
+    case = tiny(test="box", **PERIODIC)
+    folder, res = yrun(case)
+    h = res.history[res.history.shear_disp > 0.2e-3]
+    assert (-h.surface_fz / h.normal_force.abs()).mean() == pytest.approx(1.0, abs=0.03)
+    assert 0.2 < (h.surface_fx / -h.surface_fz).mean() < 0.8
+    # the bed rides with the floor: each bed grain moved −x by the shear travel (modulo L), no more
+    bed = np.array(json.loads((folder / "params.json").read_text())["bed"]) + 1
+    p = res.particles[res.particles.id.isin(bed)]
+    first, last = (p[p.snapshot == k].set_index("id") for k in (0, p.snapshot.max()))
+    travel = last.shear_disp.iloc[0]
+    L = case.box_length
+    moved = (last.x - first.x + travel + L / 2) % L - L / 2
+    assert len(bed) > 5 and np.abs(moved).max() < 1e-9 and (last.z == first.z).all()

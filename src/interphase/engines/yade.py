@@ -5,6 +5,7 @@ in the grain plane y = 0; a grain at a convex surface vertex touches two facets 
 and the reader merges those into one contact, io/yade.py) and the contact parameters; driver.py
 only calls engines/yade_driver.py, which runs the case inside YADE. Contact law: Hertz–Mindlin
 (Law2_ScGeom_MindlinPhys_Mindlin) with rolling resistance, mapped from LIGGGHTS' by `contact_parameters`.
+The periodic device (params period, bed) runs in YADE's periodic cell (engines/yade_driver.py).
 """
 
 from __future__ import annotations
@@ -74,23 +75,21 @@ def driver_input(dev: Device) -> dict:
     case, r, s = dev.case, dev.recipe, dev.steps
     p = dev.packing
     lo, hi = dev.platen_band
-    if dev.periodic:
-        from interphase.errors import InputError
-        raise InputError("the periodic device is not built for YADE yet", where="case.device",
-                         fix="run it with LIGGGHTS, or use device = 'walled' for a cross-check (docs/strength.md)")
     walls = [*zip(dev.wall_names, (dev.moving, dev.fixed)), ("platen", list(dev.platen))]
     return dict(
         version=__version__, test=case.test, dt=dev.dt, gravity=r.gravity,
         material=contact_parameters(case, r.typical_overlap),
         grains=dict(x=p.x.tolist(), z=p.z.tolist(), r=(p.diameter / 2).tolist()),
         walls=[dict(name=name, index=k, triangles=facets(segs, dev.wall_reach))
-               for k, (name, segs) in enumerate(walls)],
-        platen_force=dev.platen_force, servo_vmax=min(r.servo_speed, dev.platen_speed_limit), servo_band=r.servo_band,
+               for k, (name, segs) in enumerate(walls) if segs],           # periodic: no fixed group
+        platen_force=dev.platen_force, platen_z=dev.platen_com[1], wall_reach=dev.wall_reach,
+        servo_vmax=min(r.servo_speed, dev.platen_speed_limit), servo_band=r.servo_band,
         platen_force_lo=lo, platen_force_hi=hi, shear_velocity=case.shear_velocity,
         steps=dict(n_consolidate=s.n_consolidate, n_shear=s.n_shear, n_snapshot=s.n_snapshot, n_history=s.n_history,
                    n_chunk=s.n_chunk, n_chunks_max=s.n_chunks_max),
         bounds=list(dev.bounds), window=dev.window,
         exits=[seg[0] for seg in dev.exits] if dev.exits else None,   # grains past these x are out of the box
+        period=dev.record("yade").period, bed=list(dev.bed),           # periodic device (engines/yade_driver.py)
         # YADE runs the system python3: the driver script adds this to its sys.path to import the package
         package_root=str(Path(interphase.__file__).resolve().parents[1]),
     )
@@ -109,6 +108,9 @@ class Yade(Engine):
         return {"driver.py": environment(self.templates).get_template(self.template_name(case)).render(),
                 "params.json": json.dumps(driver_input(dev), indent=None, allow_nan=False),
                 RECIPE_FILE: dev.record(self.name).to_json()}
+
+    def template_name(self, case: Case) -> str:
+        return "periodic_shear.py.j2" if case.periodic else super().template_name(case)
 
     def arguments(self, binary: str) -> list[str]:
         threads = ["-j", str(self.profile.threads)] if self.profile.threads > 1 else []

@@ -11,6 +11,16 @@ surface / the lower box half) travels −x at the shear velocity, so the soil mo
 velocity servo toward the target force. Walls are facets, one triangle per segment with an edge in
 the grain plane y = 0 (no diagonal double contacts).
 
+Periodic device (params `period` = L): YADE's cell is periodic in x, y and z, so it is L long and
+tall and wide enough in y and z that nothing meets its own image there; the collider handles the
+boundary (positions are never wrapped in the scene) and no body may span half the cell, so long
+segments (a flat surface, the box's floor) are split into facets of at most L/4 (`split_facets`).
+There is no fixed wall group (params list the platen second, as LIGGGHTS' mesh order), no exits and
+no window (window_fx/fz = surface_fx/fz). The box test's bed (params `bed`: grain indices) is frozen
+(blockedDOFs xyzXYZ) and moves −x with the floor during the shear; the surface force is the floor's
+plus the bed grains'. Output x coordinates are wrapped into [0, L); io/yade.py unwraps contacts
+across the boundary with recipe.json's period.
+
 Protocol (engines/device.py): consolidation for n_consolidate steps, then chunks of n_chunk until
 the platen force lies in its band (else 'NOT CONSOLIDATED', exit 4); then n_shear steps of shear with
 history rows every n_history and snapshots every n_snapshot steps from the shear start. Grains whose
@@ -55,6 +65,25 @@ def in_window(x: float, z: float, window) -> bool:
     return window[0] < x < window[1] and z < window[2]
 
 
+def wrap(x: float, period) -> float:
+    """x brought into [0, period) (no period: x unchanged)."""
+    return x - period * math.floor(x / period) if period else x
+
+
+def split_facets(triangles, max_len: float) -> list[list[float]]:
+    """In-plane facets (edge (x0, 0, z0)–(x1, 0, z1), apex at y = w over its midpoint) cut into
+    equal pieces no longer than max_len, each with its apex over its own midpoint."""
+    out = []
+    for t in triangles:
+        x0, z0, x1, z1, w = t[0], t[2], t[3], t[5], t[7]
+        n = max(1, int(math.ceil(math.hypot(x1 - x0, z1 - z0) / max_len - 1e-9)))
+        for k in range(n):
+            a, b = k / n, (k + 1) / n
+            xa, za, xb, zb = x0 + a * (x1 - x0), z0 + a * (z1 - z0), x0 + b * (x1 - x0), z0 + b * (z1 - z0)
+            out.append([xa, 0.0, za, xb, 0.0, zb, 0.5 * (xa + xb), w, 0.5 * (za + zb)])
+    return out
+
+
 def in_bounds(x: float, z: float, bounds) -> bool:
     """Whether a grain centre lies inside the domain (x_lo, x_hi, z_lo, z_hi) [m]."""
     return bounds[0] < x < bounds[1] and bounds[2] < z < bounds[3]
@@ -90,19 +119,30 @@ class Driver:
                 for E, mu, label in ((M["E"], "mu_pp", "grain"), (M["E_wall"], "mu_ps", "surface"),
                                      (M["E_wall"], "mu_pw", "wall"), (M["E_wall"], "mu_side", "side"))]
         G = P["grains"]
-        self.grain_ids = []
-        for x, z, r in zip(G["x"], G["z"], G["r"]):
+        self.period = P.get("period")
+        if self.period:
+            self.periodic_cell(G)
+        bed = set(P.get("bed") or ())
+        self.grain_ids, self.bed_ids = [], []
+        for k, (x, z, r) in enumerate(zip(G["x"], G["z"], G["r"])):
             b = y.utils.sphere((x, 0.0, z), r, material=mats[0])
-            b.state.blockedDOFs = "yXZ"
+            b.state.blockedDOFs = "xyzXYZ" if k in bed else "yXZ"     # the bed: frozen, moved with the floor
             self.grain_ids.append(O.bodies.append(b))
+            if k in bed:
+                self.bed_ids.append(self.grain_ids[-1])
         self.n_grains = len(self.grain_ids)
         # wall groups in LIGGGHTS mesh order: index 0 = moving group ('ps'), then fixed walls, platen
         self.groups = []
         for g in P["walls"]:
             mat = mats[(1, 3, 2)[g["index"]]]        # wall groups: moving, fixed sides, platen
+            tris = split_facets(g["triangles"], self.period / 4) if self.period else g["triangles"]
             self.groups.append([O.bodies.append(y.utils.facet([tuple(t[k:k + 3]) for k in (0, 3, 6)],
-                                                              material=mat, fixed=True)) for t in g["triangles"]])
+                                                              material=mat, fixed=True)) for t in tris])
         self.surface_ids, self.platen_ids = self.groups[0], self.groups[-1]
+        self.loaded_ids = self.surface_ids + self.bed_ids          # what the soil loads below it
+        # platen_z in the device's frame (the platen's reference point, params platen_z) whatever
+        # point of its first facet YADE keeps as the body's position
+        self.platen_dz = P["platen_z"] - O.bodies[self.platen_ids[0]].state.pos[2]
         self.surface_set = set(self.surface_ids)
         self.wall_ids = [i for ids in self.groups for i in ids]
         self.wall_set = set(self.wall_ids)
@@ -140,6 +180,13 @@ class Driver:
         self.part = open("particles.csv", "w")
         self.part.write(PARTICLE_HEADER)
 
+    def periodic_cell(self, G) -> None:
+        """x periodic over the period; y and z many times the device's extent, so nothing meets
+        its own image there (YADE's cell is periodic in all three directions)."""
+        b, d = self.P["bounds"], 2 * max(G["r"])
+        self.O.periodic = True
+        self.O.cell.setBox(self.period, 10 * max(d, self.P["wall_reach"]), 3 * (b[3] - b[2]))
+
     # ---- measurements
     def group_force(self, ids) -> tuple[float, float]:
         fx = fz = 0.0
@@ -153,8 +200,8 @@ class Driver:
         """Force ON the surface from the grains whose centres lie in the measuring window (None:
         the whole moving group). The facet is id1."""
         W = self.P["window"]
-        if W is None:
-            return self.group_force(self.surface_ids)
+        if W is None or self.period:
+            return self.group_force(self.loaded_ids)
         fx = fz = 0.0
         for i in self.grain_ids:
             p = self.O.bodies[i].state.pos
@@ -180,6 +227,8 @@ class Driver:
 
     def fail_if_lost(self, it: int) -> None:
         bounds = self.P["bounds"]
+        if self.period:                  # x is periodic: only z can be left
+            bounds = (-math.inf, math.inf, bounds[2], bounds[3])
         lost = sum(1 for i in self.grain_ids if not in_bounds(*self._xz(i), bounds))
         if lost:
             print("ERROR: Lost atoms: %d grains left the domain at step %d" % (lost, it))
@@ -197,12 +246,17 @@ class Driver:
             if not inter.isReal:
                 continue
             g, ph = inter.geom, inter.phys
-            rows.append(contact_row(it, inter.id1, inter.id2, g.contactPoint, g.normal,
+            rows.append(contact_row(it, inter.id1, inter.id2, self.at(g.contactPoint), g.normal,
                                     ph.normalForce + ph.shearForce,    # on body 2 (YADE: id1 → id2 normal)
-                                    g.penetrationDepth, O.bodies[inter.id1].state.pos, O.bodies[inter.id2].state.pos))
+                                    g.penetrationDepth, self.at(O.bodies[inter.id1].state.pos),
+                                    self.at(O.bodies[inter.id2].state.pos)))
         self.cont.write("".join(rows))
-        self.part.write("".join(particle_row(it, i, O.bodies[i].state.pos, O.bodies[i].state.vel,
+        self.part.write("".join(particle_row(it, i, self.at(O.bodies[i].state.pos), O.bodies[i].state.vel,
                                              O.bodies[i].shape.radius) for i in self.grain_ids))
+
+    def at(self, p) -> tuple[float, float, float]:
+        """A point as written: x wrapped into [0, period) in the periodic device."""
+        return wrap(p[0], self.period), p[1], p[2]
 
     # ---- grain–facet rolling: epsd2's wall values (the Ip2 functor's single krot/eta fit grain pairs)
     def grain_radius(self, inter) -> float:
@@ -245,12 +299,12 @@ class Driver:
             self.start = it
             with open("shear_start.txt", "w") as fh:
                 fh.write("%d\n" % it)
-            self.set_velocity(self.surface_ids, y.Vector3(-P["shear_velocity"], 0, 0))
+            self.set_velocity(self.loaded_ids, y.Vector3(-P["shear_velocity"], 0, 0))
             self.t_shear = time.time()
         s0 = self.start
         if (it - s0) % S["n_history"] == 0:
-            surface = self.group_force(self.surface_ids)
-            pz = O.bodies[self.platen_ids[0]].state.pos[2]
+            surface = self.group_force(self.loaded_ids)
+            pz = O.bodies[self.platen_ids[0]].state.pos[2] + self.platen_dz
             nc = sum(1 for inter in O.interactions if inter.isReal)
             self.remove_escaped()
             self.hist.write(history_row(it, surface, fz_platen, pz, nc, self.window_force(), len(self.grain_ids),

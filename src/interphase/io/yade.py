@@ -12,6 +12,8 @@ YADE's own python needs nothing beyond the standard library):
   recipe.json    dt, steps, shear velocity (interphase.recipe, written with the input)
   shear_start.txt  the step the shear started at, when consolidation ended (time and shear
                  displacement count from it; folders without it: the first stretch's end)
+Periodic device (recipe.json period = L): x is written inside [0, L) and body 2 of a contact across
+the boundary is brought to the image beside body 1 (x2 −= L·round((x2 − x1)/L), as io/liggghts.py).
 The driver already works in the analysis frame (x shear axis, z up, the surface moving −x), so only
 ids and kinds are mapped: grain body i → particle id i − first + 1; wall group k → id1 = −1 − k,
 kind 'ps' for group 0 (rough surface; the lower half in box tests, as the LIGGGHTS reader), else 'pw'.
@@ -58,7 +60,7 @@ def _meta(folder: Path) -> dict:
     b = json.loads((folder / "bodies.json").read_text())
     start = folder / "shear_start.txt"
     n0 = int(start.read_text().split()[0]) if start.exists() else rec.steps.n_consolidate
-    return {"dt": rec.dt, "shear_start": n0, "shear_velocity": rec.shear_velocity,
+    return {"dt": rec.dt, "shear_start": n0, "shear_velocity": rec.shear_velocity, "period": rec.period,
             "first": b["first_grain"], "n_grains": b["n_grains"], "walls": b["walls"]}
 
 
@@ -99,6 +101,10 @@ def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     wall = g1 >= 0
     cx, cz = raw["cx"].to_numpy(), raw["cz"].to_numpy()
     x1, z1 = np.where(wall, cx, x1), np.where(wall, cz, z1)      # wall contact: (x1, z1) = contact point
+    if meta.get("period"):
+        # x periodic: the driver writes x inside [0, L); a contact across the boundary is between one
+        # body and the other's image, so bring body 2 to that image (as io/liggghts.py)
+        x2 = x2 - meta["period"] * np.round((x2 - x1) / meta["period"])
     kind = np.where(~wall, "pp", np.where(g1 == 0, "ps", "pw"))
     pid = lambda b: b - meta["first"] + 1
     id1 = np.where(wall, -1 - g1, pid(b1))
