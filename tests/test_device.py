@@ -258,6 +258,9 @@ def test_periodic_device_has_no_side_walls_and_a_toothed_platen():
     assert len(dev.platen) == 2 * round(L / (2 * case.d50)) and min(tips) < dev.platen_com[1] - 0.99 * case.d50
     assert min(tips) > dev.packing.top                                 # and clear of the grains
     assert dev.record("liggghts").period == L
+    # one device per case through the cache: its grains are read-only, walled or periodic
+    walled = device_module.device(Case(profile=saw, **SMALL))
+    assert not any(a.flags.writeable for d in (dev, walled) for a in (d.packing.x, d.packing.z, d.packing.diameter))
     box = device_module.device(Case(test="box", device="periodic", **SMALL))
     bed = np.array(box.bed)
     assert bed.size > 5 and np.allclose(box.packing.z[bed], box.packing.z.min())

@@ -61,6 +61,10 @@ class Device:
 
     shear_sign = 1
 
+    def __post_init__(self):
+        for a in (self.packing.x, self.packing.z, self.packing.diameter):     # shared through the cache
+            a.flags.writeable = False
+
     @property
     def test(self) -> str:
         return self.case.test
