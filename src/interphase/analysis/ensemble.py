@@ -33,7 +33,7 @@ from scipy import stats
 
 from interphase.analysis.strength import moving_average
 
-CRITICAL_FRACTION = 0.4     # the last 40 % of the shear: past the peak in every run measured
+CRITICAL_FRACTION = 0.4     # the last 40 % of the shear (3.6–6 mm of the convergence runs' 6 mm)
 GRID_POINTS = 400
 N_BOOT = 2000
 
@@ -85,7 +85,8 @@ def _critical_states(mat: np.ndarray, grid: np.ndarray, fraction: float) -> np.n
     return np.nanmean(mat[:, late], axis=1)
 
 
-def _t_interval(values: np.ndarray) -> tuple[float, float]:
+def t_interval(values) -> tuple[float, float]:
+    """95 % Student-t interval of the mean of `values` (NaN, NaN for fewer than two)."""
     n = len(values)
     if n < 2:
         return math.nan, math.nan
@@ -114,8 +115,8 @@ def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITI
         return EnsembleStrength(0, nan, nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
     peaks, at, crits = _states(curves, window, critical_fraction, grid_points)
     reason = "" if len(curves) > 1 else "one seed: no interval (run ≥ 3 seeds)"
-    return EnsembleStrength(len(curves), float(np.mean(peaks)), *_t_interval(peaks), at,
-                            float(np.mean(crits)), *_t_interval(crits), reason)
+    return EnsembleStrength(len(curves), float(np.mean(peaks)), *t_interval(peaks), at,
+                            float(np.mean(crits)), *t_interval(crits), reason)
 
 
 @dataclass(frozen=True)

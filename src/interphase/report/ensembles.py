@@ -13,9 +13,8 @@ import re
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
-from interphase.analysis.ensemble import ensemble_efficiency, ensemble_strength
+from interphase.analysis.ensemble import ensemble_efficiency, ensemble_strength, t_interval
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_delta_cs",
@@ -41,10 +40,7 @@ def _mean_interval(values) -> tuple[float, float, float]:
     v = np.asarray([x for x in values if x is not None and math.isfinite(x)], float)
     if v.size == 0:
         return math.nan, math.nan, math.nan
-    if v.size < 2:
-        return float(v[0]), math.nan, math.nan
-    half = stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size)
-    return float(v.mean()), float(v.mean() - half), float(v.mean() + half)
+    return (float(v.mean()), *t_interval(v))
 
 
 def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd.DataFrame:
