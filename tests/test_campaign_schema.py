@@ -165,12 +165,13 @@ seed = 1
 [pairs]
 box = false
 """
-GOLDEN_JSON = ('{"box_height_d50":20.0,"box_length_d50":40.0,"d50":0.0007,"density":2650.0,"friction_pp":0.5,'
-               '"friction_ps":0.5,"friction_pw":0.9,"friction_side":0.0,"gradation":"poly","n_grains":null,'
-               '"normal_stress":100000.0,"poisson":0.3,"profile":{"kind":"sawtooth","params":{"rt":1.0,"sr":0.0,"sw":2.0}},"restitution":0.5,'
+GOLDEN_JSON = ('{"box_height_d50":20.0,"box_length_d50":40.0,"d50":0.0007,"density":2650.0,"device":"walled",'
+               '"friction_pp":0.5,"friction_ps":0.5,"friction_pw":0.9,"friction_side":0.0,"gradation":"poly",'
+               '"n_grains":null,"normal_stress":100000.0,"poisson":0.3,'
+               '"profile":{"kind":"sawtooth","params":{"rt":1.0,"sr":0.0,"sw":2.0}},"restitution":0.5,'
                '"rolling_friction":0.1,"seed":1,"shear_distance":0.003,"shear_modulus":1000000000.0,'
                '"shear_velocity":0.05,"snapshot_every":0.00025,"test":"interface"}')
-GOLDEN_ID = "aa0198595c96"
+GOLDEN_ID = "712af6a2b34a"
 
 
 def test_case_id_is_golden_and_follows_engine_and_templates(tmp_path):
