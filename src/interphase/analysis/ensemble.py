@@ -39,12 +39,11 @@ N_BOOT = 2000
 
 
 @dataclass(frozen=True)
-class EnsembleStrength:
-    n_seeds: int
+class Estimates:
+    """A peak and a critical-state value, each with its 95 % interval (NaN where undefined)."""
     peak: float
     peak_lo: float
     peak_hi: float
-    peak_disp: float        # [m] where the smoothed seed-mean curve peaks
     critical: float
     critical_lo: float
     critical_hi: float
@@ -52,6 +51,17 @@ class EnsembleStrength:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+@dataclass(frozen=True)
+class EnsembleStrength(Estimates):
+    """A seed ensemble's stress ratio [-] at the peak and the critical state."""
+    n_seeds: int = 0
+    peak_disp: float = math.nan        # [m] where the smoothed seed-mean curve peaks
+
+
+class EnsembleEfficiency(Estimates):
+    """E = tan δ / tan φ [-] at the peak and the critical state."""
 
 
 def _grid(curves, grid_points: int) -> np.ndarray:
@@ -112,25 +122,11 @@ def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITI
     curves = _usable(curves)
     if not curves:
         nan = math.nan
-        return EnsembleStrength(0, nan, nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
+        return EnsembleStrength(nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
     peaks, at, crits = _states(curves, window, critical_fraction, grid_points)
     reason = "" if len(curves) > 1 else "one seed: no interval (run ≥ 3 seeds)"
-    return EnsembleStrength(len(curves), float(np.mean(peaks)), *t_interval(peaks), at,
-                            float(np.mean(crits)), *t_interval(crits), reason)
-
-
-@dataclass(frozen=True)
-class EnsembleEfficiency:
-    peak: float
-    peak_lo: float
-    peak_hi: float
-    critical: float
-    critical_lo: float
-    critical_hi: float
-    reason: str = ""
-
-    def to_dict(self) -> dict:
-        return asdict(self)
+    return EnsembleStrength(float(np.mean(peaks)), *t_interval(peaks), float(np.mean(crits)), *t_interval(crits),
+                            reason, n_seeds=len(curves), peak_disp=at)
 
 
 def ensemble_efficiency(interface_curves, box_curves, window: float, *,
