@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from interphase.analysis.strength import QUASI_STATIC_I
 from interphase.case import Case, case_id
 from interphase.campaign.schema import Campaign
 from interphase.errors import InputError
@@ -137,10 +138,9 @@ def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
 
 #: Shear-band thickness [D50] the inertial-number estimate assumes: the summaries' own I (from the
 #: grains' velocity profiles) at 0.05 m/s, 100 kPa, 1000 grains, G = 50 MPa was 2.9–5.8e-3 on 45°
-#: and 72° saw-teeth (band 2–5 D50) and 1.5–1.9e-3 in the box (docs/convergence.md): a band of
-#: 3 D50 reproduces the interface values, the one the warning must not miss.
+#: and 72° saw-teeth in the walled device (band 2–5 D50) and 1.5–1.9e-3 in the box (docs/strength.md):
+#: a band of 3 D50 reproduces the interface values, the ones the warning must not miss.
 BAND_ESTIMATE_D50 = 3.0
-QUASI_STATIC_I = 1e-3
 
 
 def inertial_estimate(case: Case, band_d50: float = BAND_ESTIMATE_D50) -> float:
