@@ -268,12 +268,31 @@ def test_periodic_device_has_no_side_walls_and_a_toothed_platen():
     assert (box.packing.z[bed] - box.packing.diameter[bed] / 2 > floor).all()   # the bed rests above it
 
 
-def test_periodic_device_refuses_what_it_cannot_wrap():
-    with pytest.raises(InputError, match="box_length_d50") as e:
-        Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=3, sr=0), device="periodic", **SMALL)
-    assert "21" in e.value.fix                                          # 20 D50 is not whole 3 D50 periods
-    with pytest.raises(InputError, match="periodic surface"):
-        Case(profile=ProfileSpec.make("random", au=2, ar=1, rtmax=2, seed=1), device="periodic", **SMALL)
+def test_periodic_device_closes_every_surface_into_its_cell():
+    from interphase.surface.normals import theta_a_filters
+    from interphase.surface.profiles import Profile, close
+
+    # a saw-tooth keeps whole periods: 20 D50 of 3 D50 teeth is a 21 D50 cell (7 periods)
+    saw = Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=3, sr=0), device="periodic", **SMALL)
+    assert saw.box_length == pytest.approx(21 * saw.d50) and saw.surface().x[-1] == pytest.approx(saw.box_length)
+    assert device_module.device(saw).record("liggghts").period == saw.box_length
+    # Group 4's random law: the cell ends where the walk returns to its start height, every face as
+    # generated, so θa is the walled case's within a degree or two
+    for name, au, ar, rtmax in (("A", 1, 1, 2), ("D", 4, 2, 4), ("G", 4, 4, 4)):
+        spec = ProfileSpec.make("random", au=au, ar=ar, rtmax=rtmax, seed=1)
+        walled = Case(profile=spec, box_length_d50=60, shear_distance=5e-3, snapshot_every=5e-4)
+        cell = walled.replace(device="periodic")
+        s = cell.surface()
+        assert s.periodic and s.z[-1] == s.z[0] and s.x[0] == 0 and s.x[-1] == cell.box_length
+        assert abs(cell.box_length / cell.d50 - 60) < 2 * au                 # within a segment or two
+        t_w, t_p = (theta_a_filters(c.sheared_surface(), c.d50, (92,))[92].theta_a_deg for c in (walled, cell))
+        assert abs(t_p - t_w) < 2.0, name
+        assert cell.window == (0.0, cell.box_length) and device_module.device(cell).bounds[1] == cell.box_length
+    # a profile that never comes back to its start height cannot close: say so, with the fix
+    ramp = Profile(np.linspace(0, 0.05, 50), np.linspace(0, 0.01, 50), name="ramp.csv")
+    with pytest.raises(InputError, match="ramp.csv") as e:
+        close(ramp, 0.02)
+    assert "walled" in e.value.fix
     # YADE builds it (engines/yade_driver.py): it renders without refusal
     files = Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))
     assert json.loads(files["params.json"])["period"] == 20 * 0.7e-3

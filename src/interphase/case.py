@@ -13,6 +13,7 @@ mid-height plane (no profile).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -97,8 +98,6 @@ class Case:
             bad("n_grains", f"must be an integer ≥ 2 or omitted, got {self.n_grains!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int):
             bad("seed", f"must be an integer, got {self.seed!r}")
-        if self.periodic and self.test == "interface":
-            self._check_periodic_surface(bad)
         if self.test == "interface" and not self.periodic and self.box_length_d50 < 4 * WALL_ZONE_D50:
             bad("box_length_d50", f"{self.box_length_d50!r} leaves less than half the box to measure in "
                 f"({WALL_ZONE_D50:g} D50 next to each side wall are left out)", f"use ≥ {4 * WALL_ZONE_D50:g}")
@@ -108,21 +107,6 @@ class Case:
         if self.d50 < self.gradation.d_min or self.d50 > self.gradation.d_max:
             bad("d50", f"{self.d50!r} m lies outside the gradation {self.gradation.d_min}–{self.gradation.d_max} m")
 
-    def _check_periodic_surface(self, bad) -> None:
-        """A periodic device wraps the surface over the box length: it must repeat with it."""
-        kind = self.profile.kind
-        if kind == "flat":
-            return
-        if kind != "sawtooth":
-            bad("device", f"the periodic device needs a periodic surface; a {kind} profile is not one",
-                "use device = 'walled' for random and measured profiles, or a flat or saw-tooth surface")
-        period = self.profile.param("sw") + self.profile.param("sr")
-        n = self.box_length_d50 / period
-        if abs(n - round(n)) > 1e-9 * n or round(n) < 1:
-            bad("box_length_d50", f"{self.box_length_d50:g} D50 is not a whole number of the saw-tooth's "
-                f"{period:g} D50 periods, so the periodic surface would not close",
-                f"use box_length_d50 = {max(1, round(n)) * period:g} (or another multiple of {period:g})")
-
     # ---- derived ---------------------------------------------------------------------------
     @property
     def periodic(self) -> bool:
@@ -131,8 +115,20 @@ class Case:
 
     @property
     def box_length(self) -> float:
-        """Soil box length [m]."""
+        """Soil box length [m]: box_length_d50·D50, except for an interface test in the periodic
+        device, where it is the length of the periodic cell (`surface()`): where the surface
+        closes on itself nearest box_length_d50·D50."""
+        if self.periodic and self.test == "interface":
+            return self._cell.length
         return self.box_length_d50 * self.d50
+
+    @functools.cached_property
+    def _cell(self):
+        """The periodic device's surface (computed once per Case; a random or measured profile is
+        generated and cut, see surface.profiles.periodic_cell)."""
+        from interphase.surface.profiles import periodic_cell
+
+        return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50)
 
     @property
     def thickness(self) -> float:
@@ -149,12 +145,12 @@ class Case:
         """The whole rough surface of an interface test in the engine frame at the start of the
         shear [m]: walled device, from x = −surface_margin to beyond L + shear_distance +
         surface_margin (it slides −x by shear_distance beneath the box [0, L]); periodic device,
-        exactly [0, L] (the engine wraps it). The one profile object of the case: the engines build
-        their meshes from it, the analysis measures it (`sheared_surface`)."""
+        exactly the cell [0, L] (`box_length`; the engine wraps it). The one profile object of the
+        case: the engines build their meshes from it, the analysis measures it (`sheared_surface`)."""
         from interphase.surface.profiles import Profile, from_spec
 
         if self.periodic:       # exactly [0, L]: the engine wraps it as it slides
-            return from_spec(self.profile, self.d50, self.box_length)
+            return self._cell
         m = self.surface_margin
         prof = from_spec(self.profile, self.d50, self.box_length + self.shear_distance + 2 * m)
         return Profile(prof.x - m, prof.z, prof.periodic, prof.name)

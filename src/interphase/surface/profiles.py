@@ -153,6 +153,40 @@ def tile(profile: Profile, length: float) -> Profile:
     return Profile(xs, zs, profile.periodic, profile.name)
 
 
+def close(profile: Profile, length: float) -> Profile:
+    """An open profile made periodic over about `length` m [m]: cut where it comes back to its
+    starting height nearest `length` from its start (a crossing between length/2 and 2·length), the
+    cut becoming the closing vertex (z[-1] = z[0]). Nothing is stretched or levelled, so every
+    face keeps its direction (and θa is that of the kept part); the joint adds one kink, as any
+    vertex does. Raises InputError when the profile does not return to its start height there."""
+    x, z = profile.x - profile.x[0], profile.z
+    s = z - z[0]
+    i = np.flatnonzero(s[:-1] * s[1:] < 0)                       # strict crossings inside a segment
+    at = x[i] - s[i] * (x[i + 1] - x[i]) / (s[i + 1] - s[i])
+    cand = np.concatenate([at, x[1:][s[1:] == 0]])
+    cand = cand[(cand >= 0.5 * length) & (cand <= 2 * length)]
+    if cand.size == 0:
+        raise InputError(f"the profile never returns to its starting height between {0.5 * length * 1e3:.4g} and "
+                         f"{2 * length * 1e3:.4g} mm, so it cannot close into a periodic cell",
+                         where=profile.name or "profile", fix="use device = 'walled' for this surface")
+    end = float(cand[np.argmin(np.abs(cand - length))])
+    keep = x < end * (1 - 1e-12)
+    return Profile(np.append(x[keep], end), np.append(z[keep], z[0]), periodic=True, name=profile.name)
+
+
+def periodic_cell(spec: ProfileSpec, d50: float, length: float) -> Profile:
+    """The surface of the periodic device for a requested cell of about `length` m, from x = 0:
+    flat, `length` exactly; a saw-tooth, the whole number of its periods nearest `length` (at least
+    one); a random or measured profile, `close`d where it returns to its starting height."""
+    if spec.kind == "flat":
+        return flat(length)
+    if spec.kind == "sawtooth":
+        lam = (spec.param("sw") + spec.param("sr")) * d50
+        return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50,
+                        periods=max(1, round(length / lam)))
+    return close(from_spec(spec, d50, 2 * length), length)
+
+
 def from_spec(spec: ProfileSpec, d50: float, length: float) -> Profile:
     """The Profile a Case refers to, starting at x = 0 and covering at least `length` m."""
     if spec.kind == "flat":
