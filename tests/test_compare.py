@@ -1,0 +1,82 @@
+"""analysis.difference (the agree / differ / undecided decision) and `campaign compare` on real runs."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from interphase.analysis.difference import difference, verdict
+from interphase.campaign.compare import compare, seed_values
+
+samples = st.lists(st.floats(-5, 5, allow_nan=False), min_size=2, max_size=8)
+
+
+@settings(max_examples=200, deadline=None)
+@given(samples, samples, st.floats(0.01, 3))
+def test_difference_interval_holds_the_change_and_the_verdict_follows_it(a, b, tol):
+    d = difference(a, b, tol)
+    assert d.change == pytest.approx(np.mean(b) - np.mean(a), abs=1e-12)
+    assert d.change_lo <= d.change + 1e-12 and d.change <= d.change_hi + 1e-12
+    assert d.verdict == verdict(d.change_lo, d.change_hi, tol)
+    if d.verdict == "agree":
+        assert -tol <= d.change_lo and d.change_hi <= tol
+    if d.verdict == "differ":
+        assert abs(d.change) > tol
+
+
+def test_difference_decides_clear_cases_and_counts_the_seeds_an_unclear_one_needs():
+    rng = np.random.default_rng(3)
+    ref = 0.40 + 0.01 * rng.standard_normal(5)
+    assert difference(ref, ref + 0.002 * rng.standard_normal(5), 0.03).verdict == "agree"
+    assert difference(ref, ref + 0.2, 0.03).verdict == "differ"
+    # scatter 0.05 on 3 seeds cannot tell a 0.01 change from 0.03: undecided, and the seeds it
+    # would take shrink the half-width below the margin at that scatter
+    wide = difference([0.35, 0.40, 0.45], [0.36, 0.41, 0.46], 0.03)
+    assert wide.verdict == "undecided" and wide.seeds_needed is not None and wide.seeds_needed > 3
+    n = wide.seeds_needed
+    from scipy import stats
+    half = stats.t.ppf(0.975, 2 * n - 2) * math.sqrt(2 * 0.05 ** 2 / n)
+    assert half < abs(abs(wide.change) - 0.03)
+    # paired: a constant per-seed shift has no scatter, whatever the seeds' spread
+    p = difference([0.35, 0.40, 0.45], [0.37, 0.42, 0.47], 0.03, paired=True)
+    assert p.change == pytest.approx(0.02) and p.change_hi - p.change_lo == pytest.approx(0, abs=1e-12)
+    assert p.verdict == "agree"
+    one = difference([0.4], [0.5], 0.03)
+    assert one.verdict == "undecided" and math.isnan(one.change_lo)
+
+
+def test_compare_shifted_ensemble_differs_on_its_metric_only():
+    rows = []
+    for seed in (1, 2, 3, 4):
+        rows.append(dict(case="box-x", case_id=f"b{seed}", seed=seed, test="box", pair_id=None, peak=0.40 + 0.005 * seed,
+                         critical=0.36, theta_r_deg=np.nan, surface_contacts=np.nan))
+        rows.append(dict(case="iface-x", case_id=f"i{seed}", seed=seed, test="interface", pair_id=f"b{seed}",
+                         peak=0.39 + 0.004 * seed, critical=0.37, theta_r_deg=30 + seed * 0.1, surface_contacts=60 + seed))
+    ref = pd.DataFrame(rows)
+    ref["E"] = ref["peak"] / 0.41
+    ref["E_cs"] = ref["critical"] / 0.36
+    var = ref.assign(peak=np.where(ref["test"].eq("interface"), ref["peak"] + 0.15, ref["peak"]))
+    t = compare(ref, var).set_index(["case", "metric"])["verdict"]
+    assert t["iface-x", "tan_delta"] == "differ"
+    assert t["iface-x", "theta_r_deg"] == "agree" and t["box-x", "tan_phi"] == "agree"
+
+
+@pytest.mark.liggghts
+def test_compare_of_a_campaign_with_itself_finds_no_change(quick_campaign):
+    from interphase.report.build import open_campaign
+
+    _, store, summ = open_campaign(quick_campaign)
+    try:
+        v = seed_values(summ, store)
+    finally:
+        store.close()
+    iface, box = v[v["test"].eq("interface")], v[v["test"].eq("box")].set_index("case_id")
+    assert len(iface) == 4 and len(box) == 2
+    # each seed's E is its interface value over its own box test's
+    assert np.allclose(iface["E"], iface["peak"].to_numpy() / box.loc[iface["pair_id"].astype(str), "peak"].to_numpy())
+    t = compare(v, v)
+    assert set(t["case"]) == set(v["case"]) and (t["change"] == 0).all()
+    assert not t["verdict"].eq("differ").any()
