@@ -80,3 +80,15 @@ def test_compare_of_a_campaign_with_itself_finds_no_change(quick_campaign):
     t = compare(v, v)
     assert set(t["case"]) == set(v["case"]) and (t["change"] == 0).all()
     assert not t["verdict"].eq("differ").any()
+
+
+@pytest.mark.liggghts
+def test_campaign_compare_cli_prints_and_writes_the_table(quick_campaign, tmp_path, capsys):
+    from interphase.cli import main
+
+    out = tmp_path / "cmp.csv"
+    assert main(["compare", str(quick_campaign), str(quick_campaign), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "tan_delta" in text and "change +0" in text
+    t = pd.read_csv(out)
+    assert {"case", "metric", "change_lo", "change_hi", "verdict"} <= set(t.columns) and len(t) >= 8

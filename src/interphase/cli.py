@@ -308,6 +308,36 @@ def _add_report(sub) -> None:
     p.set_defaults(func=_cmd_predict)
 
 
+def _add_compare(sub) -> None:
+    p = sub.add_parser("compare", help="what one changed setting does: two campaigns' physical cases compared "
+                       "on seed ensembles (agree / differ / undecided)")
+    p.add_argument("reference", help="campaign file (TOML) of the reference settings")
+    p.add_argument("variant", help="campaign file (TOML) that changes one setting")
+    p.add_argument("--out", default=None, help="also write the table to this CSV file")
+    p.add_argument("--json", action="store_true", help="print JSON rows")
+    p.set_defaults(func=_cmd_compare)
+
+
+def _cmd_compare(args) -> int:
+    from interphase.campaign.compare import compare_campaigns
+
+    table = compare_campaigns(args.reference, args.variant)
+    if table.empty:
+        raise InputError("no physical case finished in both campaigns", where=f"{args.reference}, {args.variant}",
+                         fix="labels must match apart from the seed: vary only what the label does not name")
+    if args.out:
+        table.to_csv(args.out, index=False)
+    if args.json:
+        _print_json(table.to_dict(orient="records"))
+        return 0
+    for r in table.itertuples(index=False):
+        need = f" (≈{r.seeds_needed} seeds per side would decide)" if r.verdict == "undecided" and r.seeds_needed else ""
+        print(f"{r.case}  {r.metric}: {r.ref:.4g} ({r.ref_lo:.4g}–{r.ref_hi:.4g}) → {r.value:.4g} "
+              f"({r.value_lo:.4g}–{r.value_hi:.4g}); change {r.change:+.4g} ({r.change_lo:+.4g} to {r.change_hi:+.4g}) "
+              f"vs ±{r.tol:.3g}: {r.verdict}{need}")
+    return 0
+
+
 def _cmd_report(args) -> int:
     from interphase.report.build import build_report
 
@@ -370,6 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_engine(sub)
     _add_campaign(sub)
     _add_crosscheck(sub)
+    _add_compare(sub)
     _add_report(sub)
     return parser
 
