@@ -11,8 +11,11 @@ RSS — so data with an exact breakpoint at a data x return that x exactly.
 Breakpoint intervals: (1) profile likelihood — every c with
 RSS(c) ≤ RSSmin·[1 + F0.95(1, n−p)/(n−p)], p = linear coefficients + 1 (c itself); (2) a seeded
 residual bootstrap (refit on fitted + resampled centred residuals; percentile interval), which also
-gives the coefficient intervals. Bootstrap refits refine c on a vectorised 64-point grid within the
-same bracket instead of minimize_scalar (speed; see _fit_fast).
+gives the coefficient intervals — or, when the caller passes `replicates` (fit_study with a
+SeedEnsemble), a SEED bootstrap: each replicate's (x, y) are the physical cases' means over their
+seeds drawn with replacement (seed_ensemble), so the interval measures the seed scatter of the points.
+`BilinearFit.bootstrap` says which one ran. Bootstrap refits refine c on a vectorised 64-point grid
+within the same bracket instead of minimize_scalar (speed; see _fit_fast).
 Rows are sorted by (x, y) and x is shifted to start at 0 before fitting, so a fit is invariant to row
 order and shifting x shifts c by the same amount.
 """
@@ -20,11 +23,14 @@ order and shifting x shifts c by the same amount.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 from scipy import optimize, stats
+
+from interphase.analysis.ensemble import physical_case
 
 MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
@@ -156,6 +162,7 @@ class BilinearFit:
     x_range: tuple[float, float]
     level: float = 0.95
     n_boot: int = 0
+    bootstrap: str = "residual"                 # "residual" | "seed": what the refits resampled
     extra: dict = field(default_factory=dict, compare=False)
 
     def predict(self, x) -> np.ndarray | float:
@@ -170,18 +177,36 @@ class BilinearFit:
 
     def predict_interval(self, x) -> tuple[float, float]:
         """Percentile band of the bootstrap refits at x (scalar)."""
+        lo, hi = self.predict_band(np.array([float(x)]))
+        return (float(lo[0]), float(hi[0]))
+
+    def predict_band(self, x) -> tuple[np.ndarray, np.ndarray]:
+        """Percentile band (lower, upper) of the bootstrap refits at every x (NaN without refits)."""
+        x = np.atleast_1d(np.asarray(x, dtype=float))
         boots = self.extra.get("boot_params")
         if boots is None or len(boots) == 0:
-            return (math.nan, math.nan)
-        vals = np.array([_predict_params(self.model, p, float(x)) for p in boots])
+            return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
+        b = np.asarray(boots, float)
+        b = b[np.isfinite(b).all(axis=1)]
+        if not len(b):
+            return np.full(x.shape, np.nan), np.full(x.shape, np.nan)
+        c = b[:, -1:]
+        if self.model == "hinge":
+            vals = b[:, :1] + b[:, 1:2] * x + b[:, 2:3] * np.maximum(x - c, 0.0)
+        else:
+            vals = b[:, :1] + b[:, 1:2] * np.minimum(x, c)
         a = (1 - self.level) / 2
-        return (float(np.quantile(vals, a)), float(np.quantile(vals, 1 - a)))
+        q = np.quantile(vals, [a, 1 - a], axis=0)
+        return q[0], q[1]
 
     def to_dict(self) -> dict:
         d = {"model": self.model, "c": self.c, "c_lo_profile": self.c_interval_profile[0],
              "c_hi_profile": self.c_interval_profile[1], "c_lo_boot": self.c_interval_bootstrap[0],
              "c_hi_boot": self.c_interval_bootstrap[1], "r2": self.r2, "rss": self.rss, "n": self.n,
-             "x_min": self.x_range[0], "x_max": self.x_range[1], "level": self.level, "n_boot": self.n_boot}
+             "x_min": self.x_range[0], "x_max": self.x_range[1], "level": self.level, "n_boot": self.n_boot,
+             "bootstrap": self.bootstrap}
+        if "c_interval_residual" in self.extra:     # fit_study's seed-bootstrap fits also carry this
+            d["c_lo_resid"], d["c_hi_resid"] = self.extra["c_interval_residual"]
         for i, (b, (lo, hi)) in enumerate(zip(self.coef, self.coef_interval)):
             d[f"b{i}"], d[f"b{i}_lo"], d[f"b{i}_hi"] = b, lo, hi
         return d
@@ -195,7 +220,7 @@ class BilinearFit:
                    coef_interval=tuple((float(d[f"b{i}_lo"]), float(d[f"b{i}_hi"])) for i in range(p)),
                    r2=float(d["r2"]), rss=float(d["rss"]), n=int(d["n"]),
                    x_range=(float(d["x_min"]), float(d["x_max"])), level=float(d.get("level", 0.95)),
-                   n_boot=int(d.get("n_boot", 0)))
+                   n_boot=int(d.get("n_boot", 0)), bootstrap=str(d.get("bootstrap") or "residual"))
 
 
 def _predict_params(model: str, params: np.ndarray, x: float) -> float:
@@ -216,8 +241,35 @@ def _unshift(model: str, beta: np.ndarray, c_u: float, x0: float) -> tuple[tuple
     return (float(b0 - b1 * x0), float(b1)), c_u + x0
 
 
-def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int = 199, seed: int = 0) -> BilinearFit:
-    """Fit `model` to (x, y); NaN rows are dropped. Raises FitError (with the reason) for too few points."""
+def _refit(x: np.ndarray, y: np.ndarray, model: str) -> np.ndarray:
+    """(coefficients on x, c) of a fast refit of one bootstrap replicate; NaNs if it cannot be fitted."""
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    p = 4 if model == "hinge" else 3
+    if x.size < MIN_POINTS:
+        return np.full(p, np.nan)
+    order = np.lexsort((y, x))
+    x, y = x[order], y[order]
+    x0 = float(x[0])
+    u = x - x0
+    cand = _candidates(u)
+    if cand.size == 0:
+        return np.full(p, np.nan)
+    cb, bb = _fit_fast(u, y, model, cand)
+    if not np.all(np.isfinite(bb)):
+        return np.full(p, np.nan)
+    cf, cc = _unshift(model, bb, cb, x0)
+    return np.array([*cf, cc])
+
+
+def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int = 199, seed: int = 0,
+                 replicates=None) -> BilinearFit:
+    """Fit `model` to (x, y); NaN rows are dropped. Raises FitError (with the reason) for too few points.
+
+    Intervals of c and the coefficients: a residual bootstrap (`n_boot` refits, generator `seed`), or,
+    when `replicates` is given — an array (B, 2, len(x)) of resampled (x, y) aligned with the input
+    rows, e.g. SeedEnsemble.replicates — one refit per replicate (the seed bootstrap; `n_boot` and
+    `seed` are then unused). A replicate that cannot be fitted is left out of the percentiles."""
     if model not in MODELS:
         raise ValueError(f"model must be one of {MODELS}, got {model!r}")
     x = np.asarray(x, dtype=float).ravel()
@@ -251,7 +303,15 @@ def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int
 
     coef, c = _unshift(model, beta, c_u, x0)
     boot_params = np.empty((0, p))
-    if n_boot > 0:
+    kind = "residual"
+    if replicates is not None:
+        reps = np.asarray(replicates, dtype=float)
+        if reps.ndim != 3 or reps.shape[1] != 2 or reps.shape[2] != ok.size:
+            raise ValueError(f"replicates must have shape (B, 2, {ok.size}), got {reps.shape}")
+        kind, n_boot = "seed", int(reps.shape[0])
+        boot_params = np.array([_refit(r[0], r[1], model) for r in reps]).reshape(-1, p)
+        boot_params = boot_params[np.isfinite(boot_params).all(axis=1)]
+    elif n_boot > 0:
         rng = np.random.default_rng(seed)
         X = _design(u, np.array([c_u]), model)[0]
         fitted = X @ beta
@@ -274,7 +334,7 @@ def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int
         c_boot = (math.nan, math.nan)
     return BilinearFit(model=model, coef=coef, c=float(c), c_interval_profile=c_prof, c_interval_bootstrap=c_boot,
                        coef_interval=coef_iv, r2=float(r2), rss=rss, n=int(n),
-                       x_range=(float(x[0]), float(x[-1])), level=level, n_boot=n_boot,
+                       x_range=(float(x[0]), float(x[-1])), level=level, n_boot=n_boot, bootstrap=kind,
                        extra={"boot_params": boot_params, "grid_c": cand + x0, "grid_rss": grid_rss})
 
 
@@ -364,7 +424,221 @@ def prepare_points(summaries: pd.DataFrame) -> pd.DataFrame:
     with np.errstate(divide="ignore", invalid="ignore"):
         pts["theta_r_over_theta_a"] = np.where(pts["theta_a_deg_90"] > 0,
                                                pts["theta_r_surface_deg"] / pts["theta_a_deg_90"], np.nan)
+    pts["physical_case"] = _col(pts, "label", "").map(physical_case) if len(pts) else pd.Series(dtype=str)
     return pts.reset_index(drop=True)
+
+
+# ---- seed ensembles: one point per physical case ---------------------------------------------------
+#: run-level columns averaged over a physical case's seeds (each with a Student-t interval); E and tan φ
+#: are handled apart (ratio of seed means; the paired box tests' seeds)
+AVERAGED = ("peak_stress_ratio", "theta_r_surface_deg", "theta_n_surface_deg", "theta_r_region_deg",
+            "theta_n_region_deg", "stress_ratio_region", "theta_a_deg_92", "theta_a_deg_90", "theta_a_ccw_deg_90",
+            "theta_r_over_theta_a", "rnc", "rn", "lee_share_surface", "shear_disp_at_peak", "shear_band_d50",
+            "inertial_number", "residual_stress_ratio", "dilation_at_peak")
+#: columns of a physical case that its seeds share (taken from its first run)
+SHARED = ("group", "friction_ps", "gradation", "profile_kind", "flat_spaced", "non_dilative", "rt", "sr", "sw", "au",
+          "ar", "rtmax", "device", "d50", "test", "role")
+#: quantities set by the surface alone: the same for every seed, drawn without an x error bar
+SEED_INVARIANT = frozenset({"theta_a_deg_92", "theta_a_deg_90", "theta_a_ccw_deg_90", "rnc", "rn"})
+N_BOOT_E = 2000      # resamples of E's interval when no ensembles table gives it (as analysis.ensemble)
+
+
+def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per code 0..k−1: mean of the finite values, the 95 % Student-t interval of that mean (NaN below
+    two values; the formula of analysis.ensemble.t_interval) and the count."""
+    ok = np.isfinite(values)
+    n = np.bincount(codes[ok], minlength=k).astype(float)
+    s = np.bincount(codes[ok], weights=values[ok], minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = s / n
+        dev = np.where(ok, values - mean[codes], 0.0)
+        var = np.bincount(codes, weights=dev * dev, minlength=k) / (n - 1)
+        half = stats.t.ppf(0.975, np.maximum(n - 1, 1)) * np.sqrt(var) / np.sqrt(n)
+    half = np.where(n >= 2, half, np.nan)
+    return mean, mean - half, mean + half, n
+
+
+def _padded(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(k, max count) matrix of each code's values (NaN padding) and the counts."""
+    order = np.argsort(codes, kind="stable")
+    c = codes[order]
+    n = np.bincount(c, minlength=k)
+    start = np.concatenate([[0], np.cumsum(n)[:-1]])
+    pos = np.arange(c.size) - start[c]
+    mat = np.full((k, max(int(n.max()) if n.size else 0, 1)), np.nan)
+    mat[c, pos] = values[order]
+    return mat, n
+
+
+def _draw_means(mat: np.ndarray, n: np.ndarray, rng, n_boot: int) -> np.ndarray:
+    """(n_boot, k): each row's mean over n[row] of its values drawn with replacement."""
+    k, width = mat.shape
+    idx = np.floor(rng.random((n_boot, k, width)) * n[None, :, None]).astype(int)
+    idx = np.minimum(idx, np.maximum(n - 1, 0)[None, :, None])
+    vals = mat[np.arange(k)[None, :, None], idx]
+    vals = np.where(np.arange(width)[None, None, :] < n[None, :, None], vals, np.nan)
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmean(vals, axis=2)
+
+
+@dataclass
+class SeedEnsemble:
+    """A campaign's interface runs grouped by physical case (group, label without `-sN`).
+
+    points  one row per physical case, index 0..K−1 (= column `case_index`): every AVERAGED column is
+            the mean over its seeds, with `<col>_lo`/`<col>_hi` (95 % Student t over the seeds, NaN for
+            one seed); `seeds` (runs), `box_seeds`; `peak_stress_ratio` = tan δ and `efficiency` = E
+            are the seed ensemble's (the ensembles table's when it was given); `tan_phi` its box tests'.
+    runs    the run-level points (prepare_points) with `case_index` and `tan_delta_seed` (each run's
+            value that the ensemble's tan δ averages: its peak state, else its own peak).
+    The seed bootstrap (`replicates`) resamples these runs within each physical case, and the box
+    tests' seeds within each box ensemble (shared by every case paired with it)."""
+    points: pd.DataFrame
+    runs: pd.DataFrame
+    box_values: np.ndarray          # (M, width) per box ensemble: its seeds' tan φ values (NaN padded)
+    box_counts: np.ndarray          # (M,)
+    box_of_case: np.ndarray         # (K,) box ensemble of each physical case, −1 without one
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    def seeds_per_case(self) -> np.ndarray:
+        return self.points["seeds"].to_numpy(int) if len(self.points) else np.zeros(0, int)
+
+    def replicates(self, columns, n_boot: int, seed: int = 0) -> dict[str, np.ndarray]:
+        """{column: (n_boot, K) seed-bootstrap values of the per-case points}. Each replicate draws every
+        physical case's runs with replacement (as many as it has) and every box ensemble's seeds, once
+        for all columns (common random numbers across the correlations); means as in `points`, E as
+        the ratio of the drawn means."""
+        key = (n_boot, seed)
+        if key not in self._cache:
+            rng = np.random.default_rng(seed)
+            k = len(self.points)
+            codes = self.runs["case_index"].to_numpy(int)
+            vals = {c: pd.to_numeric(self.runs[c], errors="coerce").to_numpy(float)
+                    for c in (*AVERAGED, "tan_delta_seed") if c in self.runs}
+            # one draw of run positions for every column: draw indices into the padded per-case matrix
+            mats = {c: _padded(v, codes, k) for c, v in vals.items()}
+            width = max((m.shape[1] for m, _ in mats.values()), default=1)
+            n = np.bincount(codes, minlength=k)
+            idx = np.minimum(np.floor(rng.random((n_boot, k, width)) * n[None, :, None]).astype(int),
+                             np.maximum(n - 1, 0)[None, :, None])
+            live = np.arange(width)[None, None, :] < n[None, :, None]
+            out = {}
+            for c, (m, _) in mats.items():
+                m = np.pad(m, ((0, 0), (0, width - m.shape[1])), constant_values=np.nan)
+                v = np.where(live, m[np.arange(k)[None, :, None], idx], np.nan)
+                with np.errstate(invalid="ignore"), warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    out[c] = np.nanmean(v, axis=2)
+            box = (_draw_means(self.box_values, self.box_counts, rng, n_boot) if self.box_counts.size
+                   else np.zeros((n_boot, 0)))
+            tan_phi = np.where(self.box_of_case[None, :] >= 0, box[:, np.maximum(self.box_of_case, 0)]
+                               if box.shape[1] else np.nan, np.nan)
+            out["peak_stress_ratio"] = out.get("tan_delta_seed", out.get("peak_stress_ratio"))
+            out["tan_phi"] = tan_phi
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out["efficiency"] = out["peak_stress_ratio"] / tan_phi
+            self._cache[key] = out
+        return {c: self._cache[key][c] for c in columns}
+
+
+def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | None = None, *,
+                  seed: int = 0) -> SeedEnsemble:
+    """Group run-level points (prepare_points) by physical case.
+
+    states     optional {case_id: value}: each interface run's peak state and each box run's (the value
+               its ensemble's peak averages, analysis.ensemble.seed_peak_states); without it each
+               run's own peak stress ratio stands in.
+    ensembles  optional table of report.ensembles (group, case, tan_delta…, tan_phi…, E…): its tan δ,
+               tan φ and E with their intervals replace the ones computed here (they agree when
+               `states` came from the same curves), so each E carries its box test's interval.
+    Without `ensembles`, E's interval is a percentile bootstrap of the ratio of seed means (N_BOOT_E
+    draws, generator `seed`), as analysis.ensemble.ensemble_efficiency."""
+    runs = runs.copy().reset_index(drop=True)
+    if "physical_case" not in runs:
+        runs["physical_case"] = _col(runs, "label", "").map(physical_case)
+    if "group" not in runs:
+        runs["group"] = ""
+    runs["group"] = runs["group"].astype(str)
+    keys = runs[["group", "physical_case"]].astype(str)
+    names = keys.drop_duplicates().sort_values(["group", "physical_case"]).reset_index(drop=True)
+    k = len(names)
+    code_of = {tuple(r): i for i, r in enumerate(names.itertuples(index=False, name=None))}
+    codes = np.array([code_of[tuple(r)] for r in keys.itertuples(index=False, name=None)], dtype=int)
+    runs["case_index"] = codes
+    state_of = pd.Series(states, dtype=float) if states is not None else None
+    peak = pd.to_numeric(_col(runs, "peak_stress_ratio"), errors="coerce")
+    if state_of is not None:
+        runs["tan_delta_seed"] = runs["case_id"].astype(str).map(state_of).astype(float)
+    else:
+        runs["tan_delta_seed"] = peak.astype(float)
+    # box ensembles: the distinct sets of pair_ids of the physical cases
+    pair = _col(runs, "pair_id", None)
+    box_val = (pair.astype(object).map(lambda b: state_of.get(str(b), np.nan) if b is not None and b == b else np.nan)
+               if state_of is not None else pd.to_numeric(_col(runs, "tan_phi"), errors="coerce"))
+    box_sets, box_of_case = {}, np.full(k, -1)
+    box_members: list[dict] = []
+    for i, (ids, vals) in enumerate(zip(pd.Series(pair.to_numpy()).groupby(codes), pd.Series(box_val.to_numpy()).groupby(codes))):
+        members = {str(b): float(v) for b, v in zip(ids[1], vals[1]) if b is not None and b == b and math.isfinite(v)}
+        if not members:
+            continue
+        key = tuple(sorted(members))
+        if key not in box_sets:
+            box_sets[key] = len(box_members)
+            box_members.append(members)
+        box_of_case[ids[0]] = box_sets[key]
+    m = len(box_members)
+    width = max((len(b) for b in box_members), default=1)
+    box_values = np.full((m, width), np.nan)
+    for j, b in enumerate(box_members):
+        box_values[j, :len(b)] = [b[x] for x in sorted(b)]
+    box_counts = np.array([len(b) for b in box_members], dtype=int)
+
+    pts = names.copy()
+    first = runs.groupby("case_index", sort=True).first()
+    for c in SHARED:
+        if c in runs and c != "group":
+            pts[c] = first[c].to_numpy()
+    pts["label"] = pts["physical_case"]
+    pts["case_index"] = np.arange(k)
+    pts["seeds"] = np.bincount(codes, minlength=k)
+    pts["box_seeds"] = np.where(box_of_case >= 0, box_counts[np.maximum(box_of_case, 0)] if m else 0, 0)
+    for c in AVERAGED:
+        if c not in runs:
+            continue
+        v = (runs["tan_delta_seed"] if c == "peak_stress_ratio" else pd.to_numeric(runs[c], errors="coerce"))
+        mean, lo, hi, _ = _group_t(v.to_numpy(float), codes, k)
+        pts[c], pts[f"{c}_lo"], pts[f"{c}_hi"] = mean, lo, hi
+    bmean, blo, bhi, _ = _group_t(box_values.ravel(), np.repeat(np.arange(m), width), m) if m else ([], [], [], [])
+    has = box_of_case >= 0
+    for suffix, arr in (("", bmean), ("_lo", blo), ("_hi", bhi)):
+        pts[f"tan_phi{suffix}"] = np.where(has, np.asarray(arr, float)[np.maximum(box_of_case, 0)] if m else np.nan,
+                                           np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        pts["efficiency"] = pts["peak_stress_ratio"] / pts["tan_phi"]
+    ens = SeedEnsemble(pts, runs, box_values, box_counts, box_of_case)
+    if k:
+        e = ens.replicates(["efficiency"], N_BOOT_E, seed)["efficiency"]
+        two = (pts["seeds"].to_numpy() >= 2) & (pts["box_seeds"].to_numpy() >= 2)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            q = np.nanpercentile(e, [2.5, 97.5], axis=0) if len(e) else np.full((2, k), np.nan)
+        pts["efficiency_lo"] = np.where(two, q[0], np.nan)
+        pts["efficiency_hi"] = np.where(two, q[1], np.nan)
+        ens._cache.pop((N_BOOT_E, seed), None)
+    else:
+        pts["efficiency_lo"] = pts["efficiency_hi"] = pd.Series(dtype=float)
+    if ensembles is not None and len(ensembles) and k:
+        tab = ensembles.assign(group=ensembles["group"].astype(str), case=ensembles["case"].astype(str))
+        tab = tab.set_index(["group", "case"])
+        idx = pd.MultiIndex.from_frame(pts[["group", "physical_case"]].astype(str))
+        for mine, theirs in (("efficiency", "E"), ("peak_stress_ratio", "tan_delta"), ("tan_phi", "tan_phi")):
+            for suffix in ("", "_lo", "_hi"):
+                if theirs + suffix in tab:
+                    got = pd.to_numeric(tab[theirs + suffix], errors="coerce").reindex(idx).to_numpy(float)
+                    pts[mine + suffix] = np.where(np.isnan(got) & ~idx.isin(tab.index), pts[mine + suffix], got)
+    ens.points = pts
+    return ens
 
 
 def subset(points: pd.DataFrame, spec: CorrelationSpec) -> pd.DataFrame:
@@ -392,9 +666,21 @@ class FitResult:
         return base | self.fit.to_dict() | {"reason": ""}
 
 
-def fit_study(points: pd.DataFrame, specs=STUDY, *, n_boot: int = 199, seed: int = 0) -> list[FitResult]:
-    """Fit every correlation pooled and, where the spec says, per value of its `by` column."""
+def fit_study(points: pd.DataFrame, specs=STUDY, *, n_boot: int = 199, seed: int = 0,
+              ensemble: SeedEnsemble | None = None) -> list[FitResult]:
+    """Fit every correlation pooled and, where the spec says, per value of its `by` column.
+
+    With `ensemble` (points = ensemble.points, one row per physical case) the intervals come from the
+    SEED bootstrap: `n_boot` replicates, each drawing every physical case's seeds (and its box tests')
+    with replacement and refitting the means (SeedEnsemble.replicates; the same draws for every
+    correlation). A slice in which fewer than half the cases have two seeds has no seed scatter to
+    resample: it falls back to the residual bootstrap, and `BilinearFit.bootstrap` says which ran.
+    Without `ensemble`: the residual bootstrap on whatever rows `points` has."""
     out: list[FitResult] = []
+    reps = None
+    if ensemble is not None and n_boot > 0:
+        cols = sorted({c for sp in specs for c in (sp.x, sp.y)})
+        reps = ensemble.replicates([c for c in cols if c in ensemble.points], n_boot, seed)
     for spec in specs:
         sub = subset(points, spec)
         slices = [("all", sub)]
@@ -407,9 +693,19 @@ def fit_study(points: pd.DataFrame, specs=STUDY, *, n_boot: int = 199, seed: int
                 continue
             x = pd.to_numeric(g[spec.x], errors="coerce").to_numpy(float)
             y = pd.to_numeric(g[spec.y], errors="coerce").to_numpy(float)
-            n = int((np.isfinite(x) & np.isfinite(y)).sum())
+            ok = np.isfinite(x) & np.isfinite(y)
+            n = int(ok.sum())
+            rep = None
+            if reps is not None and spec.x in reps and spec.y in reps and "case_index" in g:
+                ks = g["case_index"].to_numpy(int)
+                if (g["seeds"].to_numpy()[ok] >= 2).sum() * 2 >= max(n, 1):
+                    rep = np.stack([reps[spec.x][:, ks], reps[spec.y][:, ks]], axis=1)
             try:
-                out.append(FitResult(spec, name, n, fit_bilinear(x, y, spec.model, n_boot=n_boot, seed=seed)))
+                fit = fit_bilinear(x, y, spec.model, n_boot=n_boot, seed=seed, replicates=rep)
+                if rep is not None:       # the residual bootstrap on the same points, for comparison
+                    alt = fit_bilinear(x, y, spec.model, n_boot=n_boot, seed=seed)
+                    fit.extra["c_interval_residual"] = alt.c_interval_bootstrap
+                out.append(FitResult(spec, name, n, fit))
             except FitError as exc:
                 out.append(FitResult(spec, name, n, None, str(exc)))
     return out

@@ -151,3 +151,25 @@ def ensemble_efficiency(interface_curves, box_curves, window: float, *,
     crits = ca[ia].mean(axis=1) / cb[ib].mean(axis=1)
     (pl, ph), (cl, ch) = np.nanpercentile(peaks, [2.5, 97.5]), np.nanpercentile(crits, [2.5, 97.5])
     return EnsembleEfficiency(e_peak, float(pl), float(ph), e_crit, float(cl), float(ch))
+
+
+# ---- additions for the report's per-case points (analysis.correlations.seed_ensemble) --------------
+def physical_case(label: str) -> str:
+    """A case label without its packing seed (`…-s3`): the physical case its seeds share."""
+    import re
+
+    return re.sub(r"-s\d+$", "", str(label))
+
+
+def seed_peak_states(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
+                     grid_points: int = GRID_POINTS) -> np.ndarray:
+    """Each seed's "peak state" (its mean ratio over the smoothing window at the seed-mean curve's
+    peak, see the module doc), aligned with `curves`; NaN for an entry that is None or has fewer than
+    two finite ratios. Their mean is `ensemble_strength(curves, window).peak`, and resampling them is
+    how `ensemble_efficiency` and the correlations' seed bootstrap vary the peak."""
+    out = np.full(len(curves), np.nan)
+    ok = [i for i, c in enumerate(curves) if c is not None and np.isfinite(np.asarray(c[1], float)).sum() >= 2]
+    if ok:
+        peaks, _, _ = _states([curves[i] for i in ok], window, critical_fraction, grid_points)
+        out[ok] = peaks
+    return out

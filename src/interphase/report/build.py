@@ -8,6 +8,9 @@ Output folder (default: the campaign's output folder + "/report"):
             network_<case> — each .png and .pdf (networks: PNG)
   correlations.json   the fits (BilinearFit.to_dict rows)
   index.html          links them all
+Seeds: every figure, results table and fit is per PHYSICAL case (a case label without `-sN`): the
+mean over its seeds with a 95 % interval (tan δ, tan φ and E those of the ensembles table), fits with
+the seed bootstrap (analysis.correlations.seed_ensemble, fit_study; docs/methods.md §7).
 Memory: only the summaries table and, per figure, one case's series or contacts at a time are read.
 """
 
@@ -23,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from interphase import __version__
-from interphase.analysis.correlations import fit_study, prepare_points
+from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
 from interphase.analysis.criterion import CriterionModel
 from interphase.errors import InputError
 from interphase.report import figures as F
@@ -40,8 +43,44 @@ class ReportResult:
     files: list[Path] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     fits: list = field(default_factory=list)
-    points: pd.DataFrame | None = None
+    points: pd.DataFrame | None = None        # one row per physical case (SeedEnsemble.points): what is plotted
     ensembles: pd.DataFrame | None = None     # one row per physical case (report.ensembles)
+    runs: pd.DataFrame | None = None          # one row per run (prepare_points), for the force networks
+    ensemble: SeedEnsemble | None = None
+
+
+def ensemble_points(summaries: pd.DataFrame, store=None, *, seed: int = 0,
+                    e_note: float = 1.2) -> tuple[SeedEnsemble, pd.DataFrame | None]:
+    """The physical cases' points and their seed ensemble, and the ensembles table (None without a
+    store: then tan δ is the mean of the runs' own peaks and E the ratio of seed means)."""
+    runs = prepare_points(summaries)
+    table, states = None, None
+    if store is not None:
+        from interphase.report.ensembles import ensemble_tables
+
+        table, states = ensemble_tables(summaries, store, e_note=e_note)
+    return seed_ensemble(runs, states, table, seed=seed), table
+
+
+def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionModel:
+    """The criterion's chain from fit_study's results (the fits the report draws, seed-bootstrap
+    intervals included), as CriterionModel.from_points would fit them."""
+    pick = lambda key, sl="all": next((f for f in fits if f.spec.key == key and f.slice == sl), None)
+    reasons, theta_r = {}, {}
+    for f in fits:
+        if f.spec.key == "fig6_8" and f.fit is not None:
+            theta_r["all" if f.slice == "all" else float(f.slice.split("=")[1])] = f.fit
+    if "all" not in theta_r and pick("fig6_8") is not None:
+        reasons["fig6_8"] = pick("fig6_8").reason
+    out = {}
+    for key in ("fig6_9", "fig6_10a"):
+        f = pick(key)
+        out[key] = f.fit if f is not None else None
+        if f is not None and f.fit is None:
+            reasons[key] = f.reason
+    tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
+    return CriterionModel(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan, theta_r=theta_r,
+                          ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons)
 
 
 def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
@@ -126,14 +165,15 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     fdir.mkdir(parents=True, exist_ok=True)
     res = ReportResult(out)
     prov = provenance(store, summaries)
-    points = prepare_points(summaries)
-    res.points = points
+    ens, ens_table = ensemble_points(summaries, store, seed=seed, e_note=T.E_NOTE)
+    points, runs = ens.points, ens.runs
+    res.points, res.runs, res.ensemble = points, runs, ens
     n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0
     if points.empty:
         res.warnings.append("no finished interface case: tables and figures are empty")
     if points["tan_phi"].isna().all() if len(points) else True:
         res.warnings.append("no paired box test finished: efficiency E (Figs 6.5, 6.10a) is undefined")
-    fits = fit_study(points, n_boot=n_boot, seed=seed)
+    fits = fit_study(points, n_boot=n_boot, seed=seed, ensemble=ens)
     res.fits = fits
     (out / "correlations.json").write_text(json.dumps([_clean(fr.row()) for fr in fits], indent=1, allow_nan=False))
     res.files.append(out / "correlations.json")
@@ -143,13 +183,10 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     if campaign is not None:
         tables += T.input_tables(campaign)
     tables += T.results_tables(points)
-    if store is not None:
-        from interphase.report.ensembles import ensemble_table
-
-        ens = ensemble_table(summaries, store, e_note=T.E_NOTE)
-        res.ensembles = ens
-        tables.append(T.ensembles_table(ens))
-        high = ens[pd.to_numeric(ens["E"], errors="coerce") > T.E_NOTE]
+    if ens_table is not None:
+        res.ensembles = ens_table
+        tables.append(T.ensembles_table(ens_table))
+        high = ens_table[pd.to_numeric(ens_table["E"], errors="coerce") > T.E_NOTE]
         if len(high):
             res.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
                                 "column of the ensembles table and docs/strength.md")
@@ -157,8 +194,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     if lab_df is not None:
         from interphase.report.lab import compare
 
-        fitted = CriterionModel.from_points(points, f"campaign {campaign.name if campaign else 'report'}",
-                                            n_boot=min(n_boot, 99), seed=seed)
+        fitted = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
         usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)
         if not usable:
             res.warnings.append("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to fit "
@@ -207,7 +243,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
                 add(f"Stress ratio vs shear displacement, {grp}",
                     F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ({len(curves)} cases)",
                                     f"curves_{T._safe(grp)}", fdir))
-        add_net = _networks(store, points, fdir, res)
+        add_net = _networks(store, runs, fdir, res)
         figs += add_net
     for _, paths in figs:
         res.files += paths
@@ -222,7 +258,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     for e in table_entries:
         e["html"] = Markup(e["html"])
     page = render_page(out / "index.html", title=title or f"Report: {campaign.name if campaign else 'campaign'}",
-                       provenance=prov, n_cases=len(points), n_box=n_box, warnings=res.warnings,
+                       provenance=prov, n_cases=len(runs), n_box=n_box, warnings=res.warnings,
                        tables=table_entries, figures=fig_entries)
     res.files.append(page)
     return res
@@ -292,8 +328,13 @@ def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: 
 def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel:
     """The criterion's correlations fitted on a campaign's finished cases (for `campaign predict --fit`)."""
     campaign, store, summ = open_campaign(campaign_path)
-    store.close()
-    return CriterionModel.from_points(prepare_points(summ), f"campaign {campaign.name}", n_boot=n_boot)
+    try:
+        ens, _ = ensemble_points(summ, store)
+    finally:
+        store.close()
+    chain = [SPECS[k] for k in ("fig6_8", "fig6_9", "fig6_10a")]
+    return criterion_from_fits(fit_study(ens.points, chain, n_boot=n_boot, ensemble=ens), ens.points,
+                               f"campaign {campaign.name}")
 
 
 def criterion_model(friction: float, fit: str | Path | None = None, tan_phi: float | None = None) -> CriterionModel:

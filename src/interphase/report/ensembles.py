@@ -9,12 +9,12 @@ stress_ratio: the window ratio of an interface test, the shear plane's of a box 
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.ensemble import ensemble_efficiency, ensemble_strength, t_interval
+from interphase.analysis.ensemble import (ensemble_efficiency, ensemble_strength, physical_case, seed_peak_states,
+                                          t_interval)
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_delta_cs",
@@ -23,9 +23,7 @@ COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "
            "theta_r_hi", "theta_a_deg_92", "note")
 
 
-def physical_case(label: str) -> str:
-    """A case label without its packing seed."""
-    return re.sub(r"-s\d+$", "", str(label))
+__all__ = ["COLUMNS", "ensemble_table", "ensemble_tables", "physical_case"]
 
 
 def _curve(store, case_id: str):
@@ -59,18 +57,32 @@ def _why_high(e, rows: pd.DataFrame, e_note: float) -> str:
 def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd.DataFrame:
     """One row per physical interface case (see the module doc); `note` says why a value is
     missing, and flags E above `e_note` (an interface stronger than its soil's box test)."""
+    return ensemble_tables(summaries, store, e_note=e_note)[0]
+
+
+def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> tuple[pd.DataFrame, dict]:
+    """(the ensembles table, {case_id: the run's peak state}) — the second for every interface run and
+    box test with a curve: the value its ensemble's peak averages (analysis.ensemble.seed_peak_states),
+    which the correlations' seed bootstrap resamples (analysis.correlations.seed_ensemble)."""
     if summaries is None or summaries.empty or store is None:
-        return pd.DataFrame(columns=COLUMNS)
+        return pd.DataFrame(columns=COLUMNS), {}
     rows = summaries.assign(_case=summaries["label"].map(physical_case))
     by_id = rows.set_index(rows["case_id"].astype(str))
     iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
-    out = []
+    cache: dict = {}
+    curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, _curve(store, cid))
+    out, states = [], {}
     for (group, name), g in iface.groupby(["group", "_case"], sort=True):
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
         window = PEAK_WINDOW_D50 * d50
-        a = [c for c in (_curve(store, cid) for cid in g["case_id"]) if c is not None]
+        ids = [str(c) for c in g["case_id"]]
         box_ids = [str(p) for p in g.get("pair_id", pd.Series(dtype=object)).dropna().unique() if str(p) in by_id.index]
-        b = [c for c in (_curve(store, cid) for cid in box_ids) if c is not None]
+        for group_ids in (ids, box_ids):
+            got = [curve(c) for c in group_ids]
+            states.update({c: float(v) for c, v in zip(group_ids, seed_peak_states(got, window))
+                           if math.isfinite(v)})
+        a = [c for c in (curve(cid) for cid in ids) if c is not None]
+        b = [c for c in (curve(cid) for cid in box_ids) if c is not None]
         sa, sb = ensemble_strength(a, window), ensemble_strength(b, window)
         e = ensemble_efficiency(a, b, window)
         th = _mean_interval(pd.to_numeric(g.get("theta_r_surface_deg"), errors="coerce"))
@@ -90,4 +102,4 @@ def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd
                         E_cs_hi=e.critical_hi, theta_r_deg=th[0], theta_r_lo=th[1], theta_r_hi=th[2],
                         theta_a_deg_92=float(pd.to_numeric(g.get("theta_a_deg_92"), errors="coerce").median()),
                         note="; ".join(notes)))
-    return pd.DataFrame(out, columns=COLUMNS)
+    return pd.DataFrame(out, columns=COLUMNS), states

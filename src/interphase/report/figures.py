@@ -1,7 +1,11 @@
 """The study's figures (6.3, 6.5–6.10) as PNG and PDF, matplotlib Agg.
 
-Points: colour = particle–surface friction tan φμ, marker = group, hollow = mono-disperse, filled =
-poly-disperse. Fits are drawn over their fitted x range; a correlation without a fit draws its points
+Points: one per physical case (report.build.ensemble_points): the mean over its seeds, with 95 %
+error bars (`<col>_lo`, `<col>_hi`: Student t over the seeds; tan δ, E: the ensembles table's) in x
+and y wherever the quantity varies by seed — none in x for θa and Rnc, which the surface alone sets,
+none for a case with one seed. Colour = particle–surface friction tan φμ, marker = group, hollow =
+mono-disperse, filled = poly-disperse. Fits are drawn over their fitted x range with their bootstrap
+band (the seed bootstrap when the points have seeds); a correlation without a fit draws its points
 and says why ("no fit: n = 3 < 7"). Angles are ψ, degrees from vertical, unless an axis says ccw.
 """
 
@@ -17,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from interphase.analysis.correlations import SPECS, subset  # noqa: E402
+from interphase.analysis.correlations import SEED_INVARIANT, SPECS, subset  # noqa: E402
 
 MARKERS = "osD^vP*Xph<>"
 DPI = 110
@@ -41,8 +45,20 @@ def _styles(points: pd.DataFrame):
     return colour, marker
 
 
+def _errors(p: pd.DataFrame, col: str, centre: pd.Series) -> np.ndarray | None:
+    """(2, n) distances from `centre` to `<col>_lo` and `<col>_hi` (0 where not finite), or None when
+    the column has no interval or does not vary by seed."""
+    if col in SEED_INVARIANT or f"{col}_lo" not in p or f"{col}_hi" not in p:
+        return None
+    lo = centre - pd.to_numeric(p[f"{col}_lo"], errors="coerce")
+    hi = pd.to_numeric(p[f"{col}_hi"], errors="coerce") - centre
+    err = np.vstack([lo.to_numpy(float), hi.to_numpy(float)])
+    err = np.where(np.isfinite(err), np.maximum(err, 0.0), 0.0)
+    return err if err.any() else None
+
+
 def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bool = True) -> int:
-    """Draw the points; returns how many were finite."""
+    """Draw the points with their seed error bars (see the module doc); returns how many were finite."""
     n = 0
     if x not in points or y not in points or points.empty:
         return 0
@@ -54,11 +70,40 @@ def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bo
     for (mu, grp, grad), g in p.groupby([p["friction_ps"].fillna(-1), p["group"].astype(str),
                                          p.get("gradation", pd.Series("", index=p.index)).astype(str)], sort=True):
         c = colour.get(mu, "0.3")
+        xerr, yerr = _errors(g, x, g["_x"]), _errors(g, y, g["_y"])
+        if xerr is not None or yerr is not None:
+            ax.errorbar(g["_x"], g["_y"], xerr=xerr, yerr=yerr, fmt="none", ecolor=c, elinewidth=0.8,
+                        capsize=1.5, alpha=0.7, zorder=1, gid="seed-interval")
         ax.scatter(g["_x"], g["_y"], s=22, marker=marker.get(grp, "o"), edgecolors=c,
                    facecolors=c if grad == "poly" else "none", linewidths=1.0,
-                   label=None)
+                   label=None, zorder=2, gid="physical-case")
         n += len(g)
     return n
+
+
+def fit_view(ax, points: pd.DataFrame, x: str, y: str, reach: float = 0.3) -> None:
+    """Axis limits that show every point and each error bar up to `reach` × the points' span beyond
+    them: a seed interval of two seeds (t = 12.7) can be ten times the spread of the points, and
+    would otherwise shrink them to a line. Longer bars run off the edge."""
+    for col, setter in ((x, ax.set_xlim), (y, ax.set_ylim)):
+        if col not in points or points.empty:
+            continue
+        v = pd.to_numeric(points[col], errors="coerce").to_numpy(float)
+        v = v[np.isfinite(v)]
+        if not v.size:
+            continue
+        lo, hi = float(v.min()), float(v.max())
+        span = max(hi - lo, 1e-9 * max(abs(lo), abs(hi), 1.0))
+        for end, f in (("_lo", min), ("_hi", max)):
+            if col + end in points:
+                e = pd.to_numeric(points[col + end], errors="coerce").to_numpy(float)
+                e = e[np.isfinite(e)]
+                if e.size:
+                    bound = lo - reach * span if end == "_lo" else hi + reach * span
+                    edge = f(float(f(e)), lo if end == "_lo" else hi)
+                    lo, hi = (max(edge, bound), hi) if end == "_lo" else (lo, min(edge, bound))
+        pad = 0.05 * max(hi - lo, span)
+        setter(lo - pad, hi + pad)
 
 
 def draw_fits(ax, fits, colour) -> None:
@@ -71,8 +116,12 @@ def draw_fits(ax, fits, colour) -> None:
         lo, hi = fr.fit.x_range
         xx = np.linspace(lo, hi, 200)
         if fr.slice == "all":
+            b_lo, b_hi = fr.fit.predict_band(xx)
+            if np.isfinite(b_lo).any():
+                ax.fill_between(xx, b_lo, b_hi, color="0.5", alpha=0.18, lw=0, zorder=0)
+            ci = fr.fit.c_interval_bootstrap
             ax.plot(xx, fr.fit.predict(xx), "k-", lw=1.6, label=f"fit (all): c = {fr.fit.c:.3g} "
-                    f"[{fr.fit.c_interval_profile[0]:.3g}, {fr.fit.c_interval_profile[1]:.3g}], R² = {fr.fit.r2:.2f}")
+                    f"[{ci[0]:.3g}, {ci[1]:.3g}] ({fr.fit.bootstrap} bootstrap), R² = {fr.fit.r2:.2f}")
         else:
             mu = float(fr.slice.split("=")[1]) if "=" in fr.slice else None
             ax.plot(xx, fr.fit.predict(xx), "--", lw=1.2, color=colour.get(mu, "0.4"),
@@ -87,9 +136,12 @@ def correlation_panel(ax, points, spec_key: str, fit_results, colour, marker, le
     pts = subset(points, spec)
     n = scatter(ax, pts, spec.x, spec.y, colour, marker, legend)
     draw_fits(ax, [f for f in fit_results if f.spec.key == spec_key], colour)
+    fit_view(ax, pts, spec.x, spec.y)
     ax.set_xlabel(spec.x_label)
     ax.set_ylabel(spec.y_label)
-    ax.set_title(f"Fig. {spec.figure}: {spec.title} (n = {n})", fontsize=9)
+    seeds = pd.to_numeric(pts.get("seeds", pd.Series(dtype=float)), errors="coerce")
+    what = (f"n = {n} physical cases, seed means ± 95 %" if len(seeds) and (seeds > 1).any() else f"n = {n}")
+    ax.set_title(f"Fig. {spec.figure}: {spec.title}\n({what})", fontsize=9)
     ax.grid(alpha=0.3)
 
 
@@ -131,9 +183,10 @@ def figure_6_5(points, folder: Path) -> list[Path]:
     for ax, (y, lab) in zip(axes, (("peak_stress_ratio", "peak stress ratio tan δ [-]"),
                                    ("efficiency", "efficiency E = tan δ / tan φ [-]"))):
         n = scatter(ax, points, "rnc", y, colour, marker)
+        fit_view(ax, points, "rnc", y)
         ax.set_xlabel("Rnc(D50) [-] (centroid trace)")
         ax.set_ylabel(lab)
-        ax.set_title(f"Fig. 6.5: {lab.split(' [')[0]} vs Rnc (n = {n})", fontsize=9)
+        ax.set_title(f"Fig. 6.5: {lab.split(' [')[0]} vs Rnc (n = {n} physical cases)", fontsize=9)
         ax.grid(alpha=0.3)
         if n == 0:
             ax.text(0.5, 0.5, f"no points with both Rnc and {y}", transform=ax.transAxes, ha="center", color="C3")

@@ -148,15 +148,23 @@ def _spec_text(d: dict) -> str:
 
 
 RESULT_COLUMNS = (
-    ("label", "case"), ("friction_ps", "tan φμ [-]"), ("gradation", "gradation"),
+    ("label", "case"), ("seeds", "seeds"), ("friction_ps", "tan φμ [-]"), ("gradation", "gradation"),
     ("theta_a_deg_92", "θa > 92° [°]"), ("theta_a_deg_90", "θa ≥ 90° [°]"), ("rnc", "Rnc(D50) [-]"),
-    ("peak_stress_ratio", "tan δ peak [-]"), ("tan_phi", "tan φ box [-]"), ("efficiency", "E [-]"),
-    ("theta_r_surface_deg", "θr surface [°]"), ("theta_n_surface_deg", "θn surface [°]"),
-    ("lee_share_surface", "lee share [-]"),
+    ("peak_stress_ratio", "tan δ peak [-]"), ("peak_stress_ratio_iv", "tan δ 95%"), ("tan_phi", "tan φ box [-]"),
+    ("efficiency", "E [-]"), ("efficiency_iv", "E 95%"),
+    ("theta_r_surface_deg", "θr surface [°]"), ("theta_r_surface_deg_iv", "θr 95%"),
+    ("theta_n_surface_deg", "θn surface [°]"), ("lee_share_surface", "lee share [-]"),
     ("theta_r_region_deg", "θr region [°]"), ("stress_ratio_region", "−σxz/σzz region [-]"),
     ("shear_disp_at_peak_mm", "u at peak [mm]"), ("shear_band_d50", "shear band [D50]"),
     ("inertial_number", "I [-]"),
 )
+#: quantities whose 95 % interval the results tables print beside them ("[lo, hi]")
+RESULT_INTERVALS = ("peak_stress_ratio", "efficiency", "theta_r_surface_deg")
+
+
+def _interval_text(lo, hi) -> str:
+    lo, hi = pd.to_numeric(lo, errors="coerce"), pd.to_numeric(hi, errors="coerce")
+    return "" if not (math.isfinite(lo) and math.isfinite(hi)) else f"[{_fmt(lo, 3)}, {_fmt(hi, 3)}]"
 
 
 #: an efficiency above this gets a note in the tables: the interface is stronger than its soil's box test
@@ -173,24 +181,36 @@ def ensembles_table(df: pd.DataFrame) -> Table:
 
 
 def results_tables(points: pd.DataFrame) -> list[Table]:
-    """One results table per group (interface cases; angles ψ in degrees; θa = 0 for non-dilative)."""
+    """One results table per group, one row per physical case (SeedEnsemble.points: seed means; angles
+    ψ in degrees; θa = 0 for non-dilative), with its seed count and the 95 % intervals of tan δ, E
+    and θr. A run-level table (no `seeds` column) is printed as it is, one row per run."""
     pts = points.copy()
     pts["shear_disp_at_peak_mm"] = pd.to_numeric(pts.get("shear_disp_at_peak", np.nan), errors="coerce") * 1e3
+    for c in RESULT_INTERVALS:
+        if f"{c}_lo" in pts and f"{c}_hi" in pts:
+            pts[f"{c}_iv"] = [_interval_text(lo, hi) for lo, hi in zip(pts[f"{c}_lo"], pts[f"{c}_hi"])]
+    per_case = "seeds" in pts
     out = []
     for grp, g in pts.groupby("group", sort=True):
         cols = [(k, h) for k, h in RESULT_COLUMNS if k in g.columns]
         df = g.sort_values([c for c in ("friction_ps", "gradation", "label") if c in g.columns])[[k for k, _ in cols]]
         df.columns = [h for _, h in cols]
         notes = ["Angles ψ, degrees from vertical (positive toward −x); θa = 0 marks a non-dilative surface."]
+        if per_case:
+            notes.append("One row per physical case: the mean over its seeds (runs). tan δ, tan φ and E are the seed "
+                         "ensemble's (peak of the seed-mean curve; E with its box tests' bootstrap interval), as in the "
+                         "ensembles table, which also has the critical state; other columns: the mean of the seeds' "
+                         "values. 95 % intervals: Student t over the seeds (E: bootstrap); none for one seed.")
         e = pd.to_numeric(g.get("efficiency", pd.Series(dtype=float)), errors="coerce")
         if (e > E_NOTE).any():
             walls = "" if (g.get("device", pd.Series(dtype=str)) == "periodic").all() else (
-                ", and in the walled device the side walls confine the soil above a rough surface beyond the box "
+                "; in the walled device the side walls confine the soil above a rough surface beyond the box "
                 "test's state")
-            notes.append(f"{int((e > E_NOTE).sum())} case(s) with E > {E_NOTE:g}: one seed's peak over its box test's "
-                         f"rides both runs' fluctuations{walls} (docs/strength.md). Read E from the seed ensembles "
-                         "table.")
-        out.append(Table(f"results_{_safe(grp)}", f"Results, group {grp} ({len(df)} interface cases)",
+            notes.append(f"{int((e > E_NOTE).sum())} case(s) with E > {E_NOTE:g}{walls} (docs/strength.md): see "
+                         "their interval and the ensembles table's note.")
+        what = "physical cases" if per_case else "interface cases"
+        seeds = f", {int(pd.to_numeric(g['seeds']).sum())} runs" if per_case else ""
+        out.append(Table(f"results_{_safe(grp)}", f"Results, group {grp} ({len(df)} {what}{seeds})",
                          df.reset_index(drop=True), notes))
     return out
 
@@ -212,15 +232,21 @@ def coefficient_table(fit_results) -> Table:
             row |= {"b0": coef[0], "b0 95%": iv(*civ[0]), "b1": coef[1], "b1 95%": iv(*civ[1]),
                     "b2": coef[2], "b2 95%": iv(*civ[2]) if f.model == "hinge" else "",
                     "c": f.c, "c 95% (profile)": iv(*f.c_interval_profile),
-                    "c 95% (bootstrap)": iv(*f.c_interval_bootstrap), "R² [-]": f.r2, "note": ""}
+                    "c 95% (bootstrap)": iv(*f.c_interval_bootstrap), "bootstrap": f.bootstrap,
+                    "c 95% (residual)": iv(*f.extra["c_interval_residual"]) if "c_interval_residual" in f.extra
+                    else "", "R² [-]": f.r2, "note": ""}
         rows.append(row)
     df = pd.DataFrame(rows)
     order = ["figure", "y", "x", "model", "slice", "n", "b0", "b0 95%", "b1", "b1 95%", "b2", "b2 95%", "c",
-             "c 95% (profile)", "c 95% (bootstrap)", "R² [-]", "note"]
+             "c 95% (profile)", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)", "R² [-]", "note"]
     df = df.reindex(columns=[c for c in order if c in df.columns])
     return Table("correlations", "Bilinear correlations: hinge y = b0 + b1·x + b2·(x − c)₊, plateau y = b0 + b1·min(x, c)",
-                 df, ["x, c in the x column's units (angles ψ in degrees unless ccw); intervals 95 %: coefficients "
-                      "and c by residual bootstrap (seeded), c also by profile likelihood (F test)."])
+                 df, ["x, c in the x column's units (angles ψ in degrees unless ccw); n: physical cases (seed "
+                      "means). Intervals 95 %: coefficients and c by the bootstrap the 'bootstrap' column names — "
+                      "seed: every physical case's seeds (and its box tests') drawn with replacement, means refitted; "
+                      "residual: fitted + resampled residuals (where fewer than half the cases have two seeds) — c "
+                      "also by profile likelihood (F test) and, beside a seed bootstrap, by the residual bootstrap "
+                      "on the same means (docs/methods.md §7)."])
 
 
 def _safe(name) -> str:
