@@ -35,8 +35,12 @@ def _print_json(obj) -> None:
 
 # ---- surface toolkit: theta-a, profile ------------------------------------------------------
 def _add_surface(sub) -> None:
-    p = sub.add_parser("theta-a", help="θa, Rn, Rnc and mean asperity slope of a profile file")
-    p.add_argument("profile", help="profile file: Dektak export or two columns x z")
+    p = sub.add_parser("theta-a", help="θa, Rn, Rnc and mean asperity slope of a profile file or areal scan")
+    p.add_argument("profile", help="profile or areal scan: any format SurfaceTopography reads (FRT, SUR, MNT, "
+                   "OPDx, HFM, Mitutoyo XLSX, Dektak CSV, …) or two columns x z")
+    p.add_argument("--axis", default=None, choices=("x", "y"),
+                   help="areal scans: the shear axis whose grid lines are the profiles (default x, the file's first "
+                   "axis); θa is printed for shear in +x, −x, +y, −y either way")
     p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
     p.add_argument("--filter", type=int, default=92, choices=(92, 90),
                    help="keep trace normals > 92° (default, construction surfaces) or ≥ 90° (regular flat spacing)")
@@ -100,11 +104,23 @@ def _load_measured(path: str, units, cutoff_mm=None):
 
 
 def _cmd_theta_a(args) -> int:
-    from interphase.surface.normals import theta_a
+    from interphase.surface.instruments import read_scan
 
     d50 = _d50_m(args.d50)
+    if args.units is not None:
+        from interphase.surface.profiles import units_factor
+
+        units_factor(args.units)
+    scan = read_scan(args.profile, args.units)
+    if scan.areal:
+        return _theta_a_areal(args, scan, d50)
+    if args.axis == "y":
+        raise InputError("a line scan has only the x axis", where="--axis", fix="omit --axis for a line")
+    from interphase.surface.normals import theta_a
+
     res = theta_a(_load_measured(args.profile, args.units, args.cutoff), d50, args.filter)
-    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50}
+    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "areal": False,
+                           "units": scan.units, "reader": scan.reader}
     if args.json:
         _print_json(out)
         return 0
@@ -116,6 +132,54 @@ def _cmd_theta_a(args) -> int:
     print(f"Rn, Rnc(D50)       {res.rn:.4f}, {res.rnc:.4f}")
     print(f"mean asperity slope {res.mean_slope_deg:.2f}° (flats < 2° excluded)")
     print(f"trace points       {res.n_points}")
+    return 0
+
+
+def _theta_a_areal(args, scan, d50: float) -> int:
+    """An areal scan: every grid line along the axis is a profile; θa in the four shear directions."""
+    from interphase.surface.areal import MIN_RUN_D50, theta_a_scan
+
+    if args.cutoff is not None:
+        raise InputError("a Gaussian cut-off is not applied to areal scans yet", where="--cutoff",
+                         fix="omit --cutoff (each run is levelled by its own least-squares line)")
+    axis = args.axis or "x"
+    other = "y" if axis == "x" else "x"
+    res = theta_a_scan(scan, d50, (args.filter,), axes=(axis,))      # the chosen axis: its errors are the user's
+    missing = {}
+    try:
+        res |= theta_a_scan(scan, d50, (args.filter,), axes=(other,))
+    except InputError as exc:       # the other axis may hold no run long enough: say so in its rows
+        missing = {other: str(exc)}
+    main_res = res[f"+{axis}"][args.filter]
+    nx, ny = scan.shape
+    directions = {d: (res[d][args.filter].to_dict() if d in res else {"direction": d, "error": missing[d[1]]})
+                  for d in ("+x", "-x", "+y", "-y")}
+    out = main_res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "areal": True, "axis": axis,
+                                "shape": [nx, ny], "units": scan.units, "reader": scan.reader,
+                                "missing_points": scan.n_missing, "directions": directions}
+    if args.json:
+        _print_json(out)
+        return 0
+    print(f"scan               {args.profile}  (areal {nx} × {ny}, {scan.x[-1] * 1e3:.4g} × {scan.y[-1] * 1e3:.4g} mm, "
+          f"{scan.n_missing} missing points; {scan.reader})")
+    print(f"                   D50 = {args.d50:g} mm, filter {args.filter}°; lines split at missing points, runs "
+          f"< {MIN_RUN_D50:g}·D50 dropped, each run levelled")
+    if main_res.dilative:
+        print(f"θa (+{axis})            {main_res.theta_a_deg:.2f}° from vertical  ({main_res.theta_a_ccw_deg:.2f}° ccw "
+              f"from +{axis})")
+    else:
+        print(f"θa (+{axis})            undefined — {main_res.reason}")
+    print("shear  θa [°]   per-run 5–95 % [°]   runs  dropped  with θa   Rn      Rnc     slope [°]")
+    for d in ("+x", "-x", "+y", "-y"):
+        if d not in res:
+            print(f"{d:<6} —  {missing[d[1]]}")
+            continue
+        r = res[d][args.filter]
+        ta = f"{r.theta_a_deg:6.2f}" if r.dilative else "   n-d"
+        sp = f"{r.spread_deg[0]:6.2f} – {r.spread_deg[1]:6.2f}" if r.n_runs_dilative else "      —        "
+        print(f"{d:<6} {ta}   {sp}      {r.n_runs:5d}  {r.n_dropped:7d}  {r.n_runs_dilative:7d}   "
+              f"{r.rn:.4f}  {r.rnc:.4f}  {r.mean_slope_deg:6.2f}")
+    print("(n-d: non-dilative, no pooled trace normal beyond the filter)")
     return 0
 
 

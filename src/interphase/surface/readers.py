@@ -1,9 +1,7 @@
 """Readers of measured profiles and their preparation (centerline, resampling, Gaussian filter).
 
-Formats:
-  - Dektak stylus-profilometer export: a header block, then a line "Scan Data", a column-name line
-    ("Lateral um,Raw Micrometer,") and comma-separated rows (trailing empty fields, CRLF, Latin-1 µ).
-    Units come from the column names (um/mm) unless given.
+Formats: instrument files (the Dektak CSV export among them) through SurfaceTopography, see
+surface/instruments.py; and the project's own reader of
   - Plain two-column text/CSV: comma, semicolon, tab or spaces; leading header lines that are not
     numbers are skipped; '#' starts a comment. Units as given (the caller's option).
 x must not decrease; rows with the same x (lateral positions rounded by the instrument) are merged
@@ -29,7 +27,30 @@ _SPLIT = re.compile(r"[,;\t ]+")
 
 
 def read_profile(path: str | Path, units: str | None = None) -> Profile:
-    """Read a measured profile into metres. `units` ('um' | 'mm' | 'm') overrides the file's own."""
+    """Read a measured line profile into metres (any format `instruments.read_scan` reads). `units`
+    ('um' | 'mm' | 'm') overrides the file's own. Missing points: the longest valid run. An areal scan
+    is refused here (choose a line: instruments.line_profile, or `campaign theta-a` on the whole scan)."""
+    from interphase.surface.instruments import read_scan, valid_runs
+
+    scan = read_scan(path, units)
+    if scan.areal:
+        nx, ny = scan.shape
+        raise InputError(f"an areal scan ({nx} × {ny} points), not a line", where=str(path),
+                         fix="choose a line (profile axis/line in the campaign) or give the scan to `campaign theta-a`")
+    x, z = scan.x, scan.heights
+    if not np.all(np.isfinite(z)):
+        _, start, stop = valid_runs(np.isfinite(z)[None, :])
+        if start.size == 0:
+            raise InputError("the line has no measured point", where=str(path), fix="give a measured profile")
+        j = int(np.argmax(stop - start))
+        x, z = x[start[j]:stop[j]], z[start[j]:stop[j]]
+    if x.size < 3:
+        raise InputError(f"only {x.size} data points", where=str(path), fix="a profile needs at least 3 points")
+    return Profile(x, z, periodic=False, name=str(path))
+
+
+def read_text_profile(path: str | Path, units: str | None = None) -> Profile:
+    """The project's reader of plain two-column text x z (see the module doc); `units` default mm."""
     path = Path(path)
     where = str(path)
     if not path.is_file():
@@ -89,18 +110,7 @@ def read_profile(path: str | Path, units: str | None = None) -> Profile:
 
 
 def _find_table(lines: list[str]) -> tuple[int, str | None]:
-    """Index of the first data line and the units the file declares (Dektak), else (first numeric, None)."""
-    for i, line in enumerate(lines):
-        if line.strip().lower() == "scan data":
-            j = i + 1
-            while j < len(lines) and not lines[j].strip():
-                j += 1
-            header = lines[j] if j < len(lines) else ""
-            m = re.search(r"lateral\s*\(?\s*(um|µm|mm|m)\b", header, re.IGNORECASE)
-            units = None
-            if m:
-                units = {"µm": "um"}.get(m.group(1), m.group(1).lower())
-            return j + 1, units
+    """Index of the first data line (the first numeric row), and None: plain text declares no units."""
     for i, line in enumerate(lines):
         parts = [p for p in _SPLIT.split(line.split("#", 1)[0].strip().strip(",;")) if p]
         if len(parts) >= 1 and all(_NUM.match(p) or p.lower() in ("nan", "inf", "-inf") for p in parts[:2]):
