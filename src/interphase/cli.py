@@ -395,7 +395,11 @@ def _cmd_compare(args) -> int:
         _print_json(table.to_dict(orient="records"))
         return 0
     for r in table.itertuples(index=False):
-        need = f" (≈{r.seeds_needed} seeds per side would decide)" if r.verdict == "undecided" and r.seeds_needed else ""
+        need = ""
+        if r.verdict == "undecided":
+            n = r.seeds_needed
+            need = (f" (≈{int(n)} seeds per side would decide)" if n is not None and n == n
+                    else " (no seed count within reach decides it at this scatter)")
         print(f"{r.case}  {r.metric}: {r.ref:.4g} ({r.ref_lo:.4g}–{r.ref_hi:.4g}) → {r.value:.4g} "
               f"({r.value_lo:.4g}–{r.value_hi:.4g}); change {r.change:+.4g} ({r.change_lo:+.4g} to {r.change_hi:+.4g}) "
               f"vs ±{r.tol:.3g}: {r.verdict}{need}")
