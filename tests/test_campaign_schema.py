@@ -99,8 +99,9 @@ def test_group4_reproduces_table_6_2():
 def test_group5_reads_profile_files_relative_to_the_campaign(tmp_path):
     c = load_campaign(CAMPAIGNS / "group5.toml")
     prof = next(x for x in c.cases if x.role == "interface").case.profile
-    assert prof.kind == "file" and Path(prof.path) == (CAMPAIGNS / "profiles" / "dektak-1.csv").resolve()
-    assert prof.sha256 == hashlib.sha256((CAMPAIGNS / "profiles" / "dektak-1.csv").read_bytes()).hexdigest()
+    assert prof.kind == "file" and Path(prof.path) == (CAMPAIGNS / "profiles" / "frt-1.frt").resolve()
+    assert prof.sha256 == hashlib.sha256((CAMPAIGNS / "profiles" / "frt-1.frt").read_bytes()).hexdigest()
+    assert (prof.axis, prof.line, prof.direction) == ("x", "1/3", "+")
 
 
 def test_groups_zip_and_pairs(tmp_path):

@@ -265,7 +265,7 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
         prof = dict(prof)
         kind = prof.pop("kind")
         if kind == "file":
-            allowed = {"path", "units", "cutoff"}
+            allowed = {"path", "units", "cutoff", "axis", "line", "direction"}
             for k in prof:
                 if k not in allowed:
                     raise InputError(f"unknown key {k!r} in a file profile", where=f"{where}.profile",
@@ -275,8 +275,9 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
             path = Path(prof["path"])
             if base_dir is not None and not path.is_absolute():
                 path = Path(base_dir) / path
-            kwargs["profile"] = ProfileSpec.from_file(path, units=prof.get("units", "m"),
-                                                      cutoff=prof.get("cutoff"), where=f"{where}.profile")
+            kwargs["profile"] = ProfileSpec.from_file(path, units=prof.get("units"), cutoff=prof.get("cutoff"),
+                                                      where=f"{where}.profile", axis=prof.get("axis"),
+                                                      line=prof.get("line"), direction=prof.get("direction", "+"))
         else:
             kwargs["profile"] = ProfileSpec.make(kind, where=f"{where}.profile", **prof)
     grad = kwargs.get("gradation")

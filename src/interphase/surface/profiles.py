@@ -121,6 +121,34 @@ def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: fl
                    name=name or f"random-au{au:g}-ar{ar:g}-rtmax{rtmax:g}-seed{seed}")
 
 
+def selfaffine_profile(hurst: float, rms_slope: float, long_cutoff: float, short_cutoff: float, length: float,
+                       seed: int, *, d50: float, name: str | None = None) -> Profile:
+    """A periodic self-affine line (sizes in D50 units, one period of `length`), synthesised by
+    SurfaceTopography's Fourier filtering of random noise (fourier_synthesis): PSD C(q) ∝ q^(−1−2H)
+    between the roll-off wavelength `long_cutoff` (flat below it) and `short_cutoff` (zero above
+    it), scaled to the rms slope (dimensionless, so the same in any length unit); random phases and
+    amplitudes from numpy's PCG64 seeded by `seed`. Grid: short_cutoff/8, so that the shortest
+    wavelength has 8 points. A pure function of its args for a given SurfaceTopography version."""
+    import contextlib
+    import io
+    import warnings
+
+    if not (0 < hurst < 1 and rms_slope > 0 and 0 < short_cutoff < long_cutoff <= length):
+        raise InputError(f"need 0 < hurst < 1, rms_slope > 0, 0 < short_cutoff < long_cutoff ≤ length (D50 units), "
+                         f"got {hurst}, {rms_slope}, {short_cutoff}, {long_cutoff}, {length}", where="selfaffine profile")
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
+        warnings.simplefilter("ignore")
+        from SurfaceTopography.Generation import fourier_synthesis
+
+        n = int(math.ceil(length / (short_cutoff / 8)))
+        topo = fourier_synthesis((n,), (length,), hurst=hurst, rms_slope=rms_slope, short_cutoff=short_cutoff,
+                                 long_cutoff=long_cutoff, rng=int(seed))
+        z = np.asarray(topo.heights(), float)
+    x = np.arange(n + 1) * (length / n)
+    return Profile(x * d50, np.append(z, z[0]) * d50, periodic=True,
+                   name=name or f"selfaffine-H{hurst:g}-s{rms_slope:g}-L{long_cutoff:g}-l{short_cutoff:g}-seed{seed}")
+
+
 def crop(profile: Profile, x0: float, x1: float) -> Profile:
     """The part of a profile over [x0, x1] [m], end points interpolated (an open profile)."""
     inside = (profile.x > x0) & (profile.x < x1)
@@ -196,9 +224,26 @@ def from_spec(spec: ProfileSpec, d50: float, length: float) -> Profile:
     if spec.kind == "random":
         return random_profile(spec.param("au"), spec.param("ar"), spec.param("rtmax"), d50=d50, length=length,
                               seed=int(spec.param("seed")))
-    from interphase.surface.readers import prepare_measured, read_profile
+    if spec.kind == "selfaffine":
+        return tile(selfaffine_profile(spec.param("hurst"), spec.param("rms_slope"), spec.param("long_cutoff"),
+                                       spec.param("short_cutoff"), spec.param("length"), int(spec.param("seed")),
+                                       d50=d50), length)
+    from interphase.surface.readers import gaussian_filter, prepare_measured, read_profile
 
-    prof = prepare_measured(read_profile(spec.path, units=spec.units), cutoff=spec.cutoff)
+    if spec.axis is None and spec.line is None and spec.direction == "+":
+        # a line file as before (an areal scan: its middle line along x, through line_profile below)
+        from interphase.surface.instruments import read_scan
+
+        scan = read_scan(spec.path, units=spec.units)
+        if not scan.areal:
+            prof = prepare_measured(read_profile(spec.path, units=spec.units), cutoff=spec.cutoff)
+            return tile(prof, length)
+    from interphase.surface.instruments import line_profile, read_scan
+
+    scan = read_scan(spec.path, units=spec.units)
+    prof = line_profile(scan, spec.axis or "x", spec.line, spec.direction, d50=d50)   # levelled, longest run
+    if spec.cutoff is not None:
+        prof = gaussian_filter(prof, spec.cutoff)
     return tile(prof, length)
 
 

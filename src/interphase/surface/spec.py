@@ -8,7 +8,14 @@ kinds and their params:
   flat      —
   sawtooth  rt, sw, sr           (Groups 1–3: height, width, flat spacing; D50 units)
   random    au, ar, rtmax, seed  (Group 4; D50 units, integer seed)
-  file      path, units, sha256 (+ optional cutoff: Gaussian filter cut-off in m)
+  selfaffine hurst, rms_slope, long_cutoff, short_cutoff, length, seed
+                                 (Fourier synthesis through SurfaceTopography: Hurst exponent 0 < H < 1,
+                                 rms slope, roll-off and short cut-off wavelengths and the period, D50 units)
+  file      path, units, sha256 (+ optional cutoff: Gaussian filter cut-off in m; units None = the
+            file's own). A line of a scan (line or areal, any format instruments.read_scan reads):
+            optional axis "x" | "y" (grid lines along that axis; default x), line (an index, or "k/n":
+            the k-th of n lines spread over the scan; default the middle line), direction "+" | "-"
+            ("-": the line mirrored, sheared the other way). Specs without them keep their identity.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ KIND_PARAMS = {
     "flat": (),
     "sawtooth": ("rt", "sw", "sr"),
     "random": ("au", "ar", "rtmax", "seed"),
+    "selfaffine": ("hurst", "rms_slope", "long_cutoff", "short_cutoff", "length", "seed"),
     "file": (),
 }
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
@@ -42,9 +50,12 @@ class ProfileSpec:
     kind: str
     params: tuple[tuple[str, float], ...] = ()
     path: str | None = None
-    units: str = "m"
+    units: str | None = "m"      # None: the file's own units (file profiles)
     sha256: str | None = None
     cutoff: float | None = None  # Gaussian filter cut-off wavelength [m], file profiles only
+    axis: str | None = None      # file profiles: grid lines along x | y (None: x, the file's first axis)
+    line: int | str | None = None   # file profiles: line index or "k/n" (None: the middle line)
+    direction: str = "+"         # file profiles: "+" as measured, "-" mirrored
     where: str = field(default="profile", compare=False, repr=False)
 
     def __post_init__(self):
@@ -71,10 +82,33 @@ class ProfileSpec:
                 raise InputError("need au > 0, ar > 0, rtmax > 0 (D50 units)", where=self.where)
             if int(names["seed"]) != names["seed"]:
                 raise InputError("seed must be an integer", where=f"{self.where}.seed")
+        if self.kind == "selfaffine":
+            if not 0 < names["hurst"] < 1:
+                raise InputError("need 0 < hurst < 1", where=f"{self.where}.hurst")
+            if names["rms_slope"] <= 0 or names["short_cutoff"] <= 0:
+                raise InputError("need rms_slope > 0 and short_cutoff > 0 (D50 units)", where=self.where)
+            if not names["short_cutoff"] < names["long_cutoff"] <= names["length"]:
+                raise InputError("need short_cutoff < long_cutoff ≤ length (D50 units)", where=self.where,
+                                 fix="e.g. short_cutoff = 0.1, long_cutoff = 10, length = 60")
+            if names["length"] / names["short_cutoff"] > 1e5:
+                raise InputError("length/short_cutoff above 1e5 grid points", where=self.where)
+            if int(names["seed"]) != names["seed"]:
+                raise InputError("seed must be an integer", where=f"{self.where}.seed")
+        if self.kind != "file" and (self.axis, self.line, self.direction) != (None, None, "+"):
+            raise InputError("axis, line and direction are for file profiles", where=self.where)
         if self.kind == "file":
             if not self.path:
                 raise InputError("a file profile needs a path", where=f"{self.where}.path")
-            if self.units not in UNITS:
+            if self.axis not in (None, "x", "y"):
+                raise InputError(f"unknown axis {self.axis!r}", where=f"{self.where}.axis",
+                                 fix="use x (the file's first axis) or y")
+            if self.direction not in ("+", "-"):
+                raise InputError(f"unknown direction {self.direction!r}", where=f"{self.where}.direction",
+                                 fix="use \"+\" (as measured) or \"-\" (mirrored: sheared the other way)")
+            if self.line is not None and (isinstance(self.line, bool) or not isinstance(self.line, (int, str))):
+                raise InputError(f"line must be an integer index or \"k/n\", got {self.line!r}",
+                                 where=f"{self.where}.line")
+            if self.units is not None and self.units not in UNITS:
                 raise InputError(f"unknown units {self.units!r}", where=f"{self.where}.units",
                                  fix=f"use one of {', '.join(UNITS)}")
             if self.cutoff is not None and not (math.isfinite(self.cutoff) and self.cutoff > 0):
@@ -86,13 +120,27 @@ class ProfileSpec:
         return cls(kind=kind, params=tuple(sorted(params.items())), where=where)
 
     @classmethod
-    def from_file(cls, path: str | Path, units: str = "m", cutoff: float | None = None,
-                  where: str = "profile") -> "ProfileSpec":
+    def from_file(cls, path: str | Path, units: str | None = "m", cutoff: float | None = None,
+                  where: str = "profile", axis: str | None = None, line: int | str | None = None,
+                  direction: str = "+") -> "ProfileSpec":
+        """A file profile; with axis/line the file is read now, so that a line outside the scan or a
+        file no reader takes is refused when the campaign is loaded, not when a case runs."""
         p = Path(path)
         if not p.is_file():
             raise InputError(f"profile file {str(p)!r} does not exist", where=f"{where}.path",
                              fix="give the path of an existing profile file (relative to the campaign file)")
-        return cls(kind="file", path=str(p), units=units, sha256=file_sha256(p), cutoff=cutoff, where=where)
+        if isinstance(line, float) and line.is_integer():
+            line = int(line)
+        spec = cls(kind="file", path=str(p), units=units, sha256=file_sha256(p), cutoff=cutoff, where=where,
+                   axis=axis, line=line, direction=direction)
+        if axis is not None or line is not None:
+            from interphase.surface.instruments import parse_line, read_scan
+
+            scan = read_scan(p, units)
+            _, Z = scan.lines(axis or "x")
+            if line is not None:
+                parse_line(line, Z.shape[0], f"{where}.line ({p})")
+        return spec
 
     def param(self, name: str) -> float:
         return dict(self.params)[name]
@@ -104,11 +152,21 @@ class ProfileSpec:
             out["params"] = {k: float(v) for k, v in self.params}
         if self.kind == "file":
             out.update(sha256=self.sha256, units=self.units, cutoff=self.cutoff)
+            # the line choice joins the identity only when made (older specs keep their ids)
+            if self.axis is not None:
+                out["axis"] = self.axis
+            if self.line is not None:
+                out["line"] = self.line
+            if self.direction != "+":
+                out["direction"] = self.direction
         return out
 
     def label(self) -> str:
         if self.kind == "file":
-            return Path(self.path).stem
+            out = Path(self.path).stem
+            if self.axis is not None or self.line is not None:
+                out += f"-{self.axis or 'x'}{str(self.line).replace('/', 'of') if self.line is not None else ''}"
+            return out + ("-rev" if self.direction == "-" else "")
         if not self.params:
             return self.kind
         return self.kind + "-" + "-".join(f"{k}{v:g}" for k, v in self.params)
