@@ -1,0 +1,196 @@
+"""Can the cross-check see a wrong YADE mapping? (groundwork of its power study)
+
+The YADE side is run with a deliberate mis-mapping — particle–surface friction × k, rolling
+resistance off, stiffness × k — WITHOUT a production flag: the YADE engine renders its input as data
+(params.json, engines/yade.py), and `mismapped_yade(...)` is a test-only subclass whose render()
+alters that data. It is put in the engine registry under the name "yade" for one test
+(`use_yade`), so campaign planning, case ids and runs go through the ordinary code. Its template
+hash mixes in the alteration, so its cases never share a folder (a case id) with the true mapping's
+or with another alteration's.
+
+The local executor runs each case in a spawned worker, which would build the engine from a fresh
+registry (the true YADE); `use_yade` swaps it for `InProcessExecutor`, the same contract in threads
+of this process (the engines still run as subprocesses, `jobs` at a time).
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import os
+from concurrent.futures import ThreadPoolExecutor, as_completed
+
+import pytest
+
+from interphase.campaign.crosscheck import crosscheck
+from interphase.engines.yade import Yade
+from tests.conftest import need_binary
+
+#: the gross mis-mapping of the power study: each alteration alone or together
+GROSS = {"friction": 1.3, "rolling": False, "stiffness": 4.0}
+
+
+def mismap(params: dict, *, friction: float = 1.0, rolling: bool = True, stiffness: float = 1.0) -> dict:
+    """A copy of YADE's params.json data with the particle–surface friction × `friction`, rolling
+    resistance off (`rolling=False`: eta, krot, the facet values 0) and Young's moduli (grains and
+    walls: every contact stiffness) × `stiffness`."""
+    p = copy.deepcopy(params)
+    m = p["material"]
+    m["mu_ps"] *= friction
+    if not rolling:
+        m.update(eta=0.0, krot=0.0, krot_wall=0.0, mu_r=0.0)
+    m["E"] *= stiffness
+    m["E_wall"] *= stiffness
+    return p
+
+
+def mismapped_yade(**alteration) -> type[Yade]:
+    """A Yade engine class whose params.json is `mismap(params, **alteration)`."""
+    alteration = dict(alteration)
+
+    class MismappedYade(Yade):
+        def render(self, case):
+            files = super().render(case)
+            files["params.json"] = json.dumps(mismap(json.loads(files["params.json"]), **alteration),
+                                              allow_nan=False)
+            return files
+
+        def template_hash(self) -> str:
+            mix = super().template_hash() + json.dumps(alteration, sort_keys=True)
+            return hashlib.sha256(mix.encode()).hexdigest()[:16]
+
+    MismappedYade.alteration = alteration
+    return MismappedYade
+
+
+class InProcessExecutor:
+    """LocalExecutor's contract (executors.py) in threads of this process."""
+    name = "local"
+
+    def __init__(self, jobs: int = 0):
+        self.jobs = jobs if jobs and jobs > 0 else (os.cpu_count() or 1)
+
+    def run(self, tasks, on_event, grace: float = 30.0) -> None:
+        from interphase.campaign.runner import run_case
+
+        with ThreadPoolExecutor(max_workers=self.jobs) as pool:
+            futures = {}
+            for t in tasks:
+                on_event("started", t.case_id, {"pid": os.getpid()})
+                futures[pool.submit(run_case, t.case, t.engine, t.folder, t.meta)] = t
+            for fut in as_completed(futures):
+                on_event("finished", futures[fut].case_id, fut.result())
+
+
+@pytest.fixture
+def use_yade(monkeypatch):
+    """use_yade(cls): campaigns of this test run YADE as `cls` (None: the true engine), in process."""
+    from interphase.campaign import plan as plan_mod
+    from interphase.campaign import run as run_mod
+    from interphase.engines import base
+
+    monkeypatch.setattr(run_mod, "LocalExecutor", InProcessExecutor)
+
+    def use(cls):
+        if cls is not None:
+            monkeypatch.setitem(base._REGISTRY, "yade", cls)
+        else:
+            monkeypatch.setitem(base._REGISTRY, "yade", Yade)
+        plan_mod.engine_identity.cache_clear()      # case ids follow the engine's template hash
+
+    yield use
+    monkeypatch.undo()
+    plan_mod.engine_identity.cache_clear()
+
+
+def test_mismapping_alters_only_the_named_parameters():
+    """Rendering only (no engine): the altered params.json differs from the true one in exactly the
+    named values, and each alteration has its own case identity."""
+    from interphase.case import Case, ProfileSpec
+
+    case = Case(test="interface", profile=ProfileSpec("flat"), friction_ps=0.5, rolling_friction=0.1, shear_modulus=50e6, n_grains=200)
+    true = json.loads(Yade().render(case)["params.json"])
+    cls = mismapped_yade(**GROSS)
+    bad = json.loads(cls().render(case)["params.json"])
+    m, b = true["material"], bad["material"]
+    assert b["mu_ps"] == pytest.approx(1.3 * m["mu_ps"]) and m["mu_ps"] == 0.5
+    assert m["krot"] > 0 and m["eta"] > 0 and b["krot"] == b["eta"] == b["krot_wall"] == b["mu_r"] == 0
+    assert b["E"] == pytest.approx(4 * m["E"]) and b["E_wall"] == pytest.approx(4 * m["E_wall"])
+    changed = {k for k in m if m[k] != b[k]}
+    assert changed == {"mu_ps", "krot", "eta", "krot_wall", "mu_r", "E", "E_wall"}
+    assert {k: v for k, v in true.items() if k != "material"} == {k: v for k, v in bad.items() if k != "material"}
+    hashes = {Yade().template_hash(), cls().template_hash(), mismapped_yade(friction=1.3)().template_hash()}
+    assert len(hashes) == 3
+
+
+POWER_CAMPAIGN = """\
+[campaign]
+name = "xc-power"
+engines = ["liggghts", "yade"]
+
+[execution]
+executor = "local"
+jobs = 2
+
+[case]
+test = "interface"
+profile = {kind = "flat"}
+gradation = "mono"
+d50 = 0.0007
+shear_modulus = 50e6
+friction_ps = 0.2
+rolling_friction = 0.1
+shear_distance = 0.001
+snapshot_every = 0.0005
+box_length_d50 = 20.0
+box_height_d50 = 10.0
+n_grains = 200
+
+[sweep]
+seed = [1, 2, 3]
+
+[pairs]
+box = false
+
+[crosscheck]
+stress_ratio_rel = 0.10
+angle_deg = 3.0
+"""
+
+
+@pytest.mark.liggghts
+@pytest.mark.yade
+def test_friction_mismapping_is_detected_as_differ(tmp_path, use_yade):
+    """A flat surface at μs = 0.2, 3 packing seeds (1 mm of shear), YADE with the particle–surface
+    friction × 1.3: the paired peak stress ratio difference YADE − LIGGGHTS is positive and its
+    95 % interval lies entirely above the 10 % tolerance → "differ", and the report fails.
+    Measured (2 cores busy with other runs: 2 min 20 s): LIGGGHTS 0.200, YADE 0.260 (sd < 1e-6 each: the
+    flat's peak is sliding at μs), difference +0.060 [+0.060, +0.060] against ±0.023 → differ.
+
+    Why μs = 0.2 and not 0.5: at μs = 0.5 the flat's peak lies below μs (0.33–0.41 at 200 grains:
+    grains roll over the surface rather than slide), so the surface friction is not what holds it,
+    and 3 seeds did not see friction × 1.3 there — measured at 1.5 mm: LIGGGHTS 0.359 ± 0.042,
+    mis-mapped YADE 0.325 ± 0.022, difference −0.034 [−0.147, +0.079] → undecided. For the power
+    study (item 3): pick cases where the mis-mapped parameter carries the load."""
+    need_binary("liggghts")
+    need_binary("yade")
+    path = tmp_path / "xc.toml"
+    path.write_text(POWER_CAMPAIGN)
+    out = tmp_path / "out"
+
+    use_yade(mismapped_yade(friction=1.3))
+    report = crosscheck(path, output=out)
+    assert not report.missing
+    row = report.judged.set_index("metric").loc["peak_stress_ratio"]
+    print(f"\nmis-mapped (μs × 1.3): LIGGGHTS {row.liggghts:.4f} ± {row.liggghts_sd:.3f}, YADE {row.yade:.4f} ± "
+          f"{row.yade_sd:.3f}, YADE − LIGGGHTS {row['diff']:+.4f} [{row.diff_lo:+.4f}, {row.diff_hi:+.4f}], "
+          f"tol ±{row.tolerance:.4f} → {row.verdict}")
+    # the alteration reached the engine: every YADE case folder ran with μs = 1.3 × 0.2
+    yade_params = [json.loads(p.read_text()) for p in out.glob("*/params.json")]
+    assert len(yade_params) == 3 and all(p["material"]["mu_ps"] == pytest.approx(0.26) for p in yade_params)
+    assert row.seeds == 3
+    assert row.verdict == "differ" and row.diff_lo > row.tolerance
+    assert not report.passed
+    seeds = report.seeds[report.seeds.metric == "peak_stress_ratio"]
+    assert len(seeds) == 3 and seeds.verdict.isna().all()      # per-seed rows: information, no verdict
