@@ -170,11 +170,11 @@ def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, wh
     zf = np.empty(int(nf.sum()))
     i0 = np.flatnonzero(seg)
     frac = np.arange(m) / m
-    seg_vals = z[i0, None] + (z[i0 + 1] - z[i0])[:, None] * frac
-    dest = ffirst[run[i0], None] + pos[i0, None] * m + np.arange(m)
-    zf[dest.ravel()] = seg_vals.ravel()
-    last = first + nr - 1
-    zf[ffirst + nf - 1] = z[last]
+    # segments come in run order, so their samples fill every place but the runs' last points
+    body = np.ones(zf.size, bool)
+    body[ffirst + nf - 1] = False
+    zf[body] = (z[i0, None] + (z[i0 + 1] - z[i0])[:, None] * frac).ravel()
+    zf[~body] = z[first + nr - 1]
     frun = np.repeat(np.arange(R), nf)
     fpos = np.arange(zf.size) - ffirst[frun]
     # Rn: every window of D50 inside a run, pooled
