@@ -81,7 +81,7 @@ def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bo
     return n
 
 
-def fit_view(ax, points: pd.DataFrame, x: str, y: str, reach: float = 0.3) -> None:
+def fit_view(ax, points: pd.DataFrame, x: str, y: str, reach: float = 0.5) -> None:
     """Axis limits that show every point and each error bar up to `reach` × the points' span beyond
     them: a seed interval of two seeds (t = 12.7) can be ten times the spread of the points, and
     would otherwise shrink them to a line. Longer bars run off the edge."""
