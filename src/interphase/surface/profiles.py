@@ -182,24 +182,29 @@ def tile(profile: Profile, length: float) -> Profile:
 
 
 def close(profile: Profile, length: float) -> Profile:
-    """An open profile made periodic over about `length` m [m]: cut where it comes back to its
-    starting height nearest `length` from its start (a crossing between length/2 and 2·length), the
-    cut becoming the closing vertex (z[-1] = z[0]). Nothing is stretched or levelled, so every
-    face keeps its direction (and θa is that of the kept part); the joint adds one kink, as any
-    vertex does. Raises InputError when the profile does not return to its start height there."""
+    """An open profile made periodic over about `length` m [m]: cut between two crossings of its
+    mean height (length-weighted), the first crossing and the one nearest `length` after it (at
+    least length/2, at most 2·length after it), both ends at that height, x from 0. Nothing is
+    stretched or levelled, so every face keeps its direction (and θa is that of the kept part); the
+    joint adds one kink, as any vertex does. The mean height, not the first point's, so that an
+    edge step or an outlier at the start of a measured line cannot leave it unclosable. Raises
+    InputError when the profile does not cross its mean height again in that range."""
     x, z = profile.x - profile.x[0], profile.z
-    s = z - z[0]
+    level = float(np.sum(0.5 * (z[1:] + z[:-1]) * np.diff(x)) / x[-1])
+    s = z - level
     i = np.flatnonzero(s[:-1] * s[1:] < 0)                       # strict crossings inside a segment
-    at = x[i] - s[i] * (x[i + 1] - x[i]) / (s[i + 1] - s[i])
-    cand = np.concatenate([at, x[1:][s[1:] == 0]])
-    cand = cand[(cand >= 0.5 * length) & (cand <= 2 * length)]
+    at = np.sort(np.concatenate([x[i] - s[i] * (x[i + 1] - x[i]) / (s[i + 1] - s[i]), x[s == 0]]))
+    start = float(at[0]) if at.size else math.nan
+    cand = at[(at >= start + 0.5 * length) & (at <= start + 2 * length)]
     if cand.size == 0:
-        raise InputError(f"the profile never returns to its starting height between {0.5 * length * 1e3:.4g} and "
-                         f"{2 * length * 1e3:.4g} mm, so it cannot close into a periodic cell",
+        raise InputError(f"the profile does not cross its mean height twice about {length * 1e3:.4g} mm apart "
+                         f"({x[-1] * 1e3:.4g} mm searched), so it cannot close into a periodic cell",
                          where=profile.name or "profile", fix="use device = 'walled' for this surface")
-    end = float(cand[np.argmin(np.abs(cand - length))])
-    keep = x < end * (1 - 1e-12)
-    return Profile(np.append(x[keep], end), np.append(z[keep], z[0]), periodic=True, name=profile.name)
+    end = float(cand[np.argmin(np.abs(cand - start - length))])
+    inside = (x > start * (1 + 1e-12) + 1e-15) & (x < end * (1 - 1e-12))
+    xs = np.concatenate([[start], x[inside], [end]]) - start
+    zs = np.concatenate([[level], z[inside], [level]])
+    return Profile(xs, zs, periodic=True, name=profile.name)
 
 
 def periodic_cell(spec: ProfileSpec, d50: float, length: float) -> Profile:
