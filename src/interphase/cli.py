@@ -321,7 +321,8 @@ def _cmd_campaign_status(args) -> int:
 
 # ---- engine cross-check: crosscheck -----------------------------------------------------------
 def _add_crosscheck(sub) -> None:
-    p = sub.add_parser("crosscheck", help="run a campaign with LIGGGHTS and YADE and compare them case by case")
+    p = sub.add_parser("crosscheck", help="run a campaign with LIGGGHTS and YADE and judge them on paired seed ensembles "
+                       "(agree / differ / undecided per metric)")
     p.add_argument("campaign", help="campaign file (TOML) with an optional [crosscheck] table of tolerances")
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: the file's, else one per core)")
     p.add_argument("--output", default=None, help="output folder (default: as in `campaign run`)")
@@ -332,7 +333,7 @@ def _add_crosscheck(sub) -> None:
 
 
 def _cmd_crosscheck(args) -> int:
-    """Exit 0 if every compared metric is within tolerance and every case finished, else 1."""
+    """Exit 0 if every judged metric agrees (paired seed ensembles) and every case finished, else 1."""
     from interphase.campaign.crosscheck import crosscheck
 
     report = crosscheck(args.campaign, jobs=args.jobs, output=args.output, rerun_failed=args.rerun_failed,
@@ -342,7 +343,8 @@ def _cmd_crosscheck(args) -> int:
     else:
         print(report.markdown())
         print(f"tolerances: {report.tolerances}; table written to {report.output / 'crosscheck.csv'} and .md")
-        print("PASS" if report.passed else "FAIL (see the rows marked NO and the cases without a result)")
+        print("PASS: every judged metric agrees" if report.passed else
+              "FAIL: a metric differs or is undecided, or a case has no result (see the verdicts above)")
     return 0 if report.passed else 1
 
 
