@@ -71,7 +71,7 @@ def bench_planning(tmp: Path) -> dict:
     rts = ", ".join(f"{0.1 + 0.2 * i:.1f}" for i in range(25))
     seeds = ", ".join(str(i) for i in range(1, 101))
     f.write_text(BIG % (rts, seeds))
-    engine_identity("liggghts")          # `liggghts -h` once (0.1 s), outside the timing like any cache
+    engine_identity("liggghts")          # the engine's recipe id once, outside the timing like any cache
     t0 = time.perf_counter()
     camp = load_campaign(f, output=tmp / "big-out")
     t1 = time.perf_counter()
@@ -98,7 +98,7 @@ class StandIn(Engine):
     def version(self):
         return "standin 0"
 
-    def template_hash(self):
+    def recipe_id(self):
         return "0" * 16
 
     def render(self, case):

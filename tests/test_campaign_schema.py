@@ -17,7 +17,7 @@ from interphase.errors import InputError
 ROOT = Path(__file__).resolve().parents[1]
 BAD = ROOT / "tests" / "data" / "campaigns_bad"
 CAMPAIGNS = ROOT / "campaigns"
-FAKE_ID = ("LIGGGHTS-PUBLIC 3.8.0", "0123456789abcdef")   # (engine version, template hash) for pure plan tests
+FAKE_ID = "0123456789abcdef"   # a recipe id for pure plan tests
 
 # file → (line the message must point at, key it must name)
 BAD_FILES = {
@@ -172,24 +172,22 @@ GOLDEN_JSON = ('{"box_height_d50":20.0,"box_length_d50":40.0,"d50":0.0007,"densi
                '"profile":{"kind":"sawtooth","params":{"rt":1.0,"sr":0.0,"sw":2.0}},"restitution":0.5,'
                '"rolling_friction":0.1,"seed":1,"shear_distance":0.003,"shear_modulus":1000000000.0,'
                '"shear_velocity":0.05,"snapshot_every":0.00025,"test":"interface"}')
-GOLDEN_ID = "712af6a2b34a"
+GOLDEN_ID = "d8f8e0a0bc51"
 
 
-def test_case_id_is_golden_and_follows_engine_and_templates(tmp_path):
+def test_case_id_is_golden_and_follows_the_recipe(tmp_path):
     f = tmp_path / "golden.toml"
     f.write_text(GOLDEN_TOML)
     c = load_campaign(f)
     (case,) = [x.case for x in c.cases]
     # the id is the hash of these exact bytes: the same on every machine
     assert canonical_json(case.canonical()) == GOLDEN_JSON
-    payload = canonical_json({"case": case.canonical(), "engine": "liggghts", "engine_version": FAKE_ID[0],
-                              "template": FAKE_ID[1]})
+    payload = canonical_json({"case": case.canonical(), "engine": "liggghts", "recipe": FAKE_ID})
     assert hashlib.sha256(payload.encode()).hexdigest()[:12] == GOLDEN_ID
     (p,) = plan(c, identity=lambda name: FAKE_ID)
     assert p.case_id == GOLDEN_ID
-    # a new engine build or an edited template gives new ids (new folders; old results kept)
-    assert plan(c, identity=lambda name: ("LIGGGHTS-PUBLIC 3.8.1", FAKE_ID[1]))[0].case_id != GOLDEN_ID
-    assert plan(c, identity=lambda name: (FAKE_ID[0], "fedcba9876543210"))[0].case_id != GOLDEN_ID
+    # a new recipe gives new ids (new folders; old results kept)
+    assert plan(c, identity=lambda name: "fedcba9876543210")[0].case_id != GOLDEN_ID
     # and so does any physical input; a label does not
     f.write_text(GOLDEN_TOML.replace("seed = 1", "seed = 2"))
     assert plan(load_campaign(f), identity=lambda name: FAKE_ID)[0].case_id != GOLDEN_ID
@@ -218,4 +216,4 @@ def test_a_box_case_is_one_test_however_declared():
     plain = Case(test="box", friction_pw=0.9)
     declared = Case(test="box", friction_ps=0.2, friction_pw=0.9)
     assert declared.friction_ps == 0.9 and declared.label() == plain.label() and "mu0.9" in plain.label()
-    assert case_id(declared, "liggghts", "v", "t") == case_id(plain, "liggghts", "v", "t")
+    assert case_id(declared, "liggghts", "r") == case_id(plain, "liggghts", "r")

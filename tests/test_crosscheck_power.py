@@ -56,8 +56,8 @@ def mismapped_yade(**alteration) -> type[Yade]:
                                               allow_nan=False)
             return files
 
-        def template_hash(self) -> str:
-            mix = super().template_hash() + json.dumps(alteration, sort_keys=True)
+        def recipe_id(self) -> str:
+            mix = super().recipe_id() + json.dumps(alteration, sort_keys=True)
             return hashlib.sha256(mix.encode()).hexdigest()[:16]
 
     MismappedYade.alteration = alteration
@@ -97,7 +97,7 @@ def use_yade(monkeypatch):
             monkeypatch.setitem(base._REGISTRY, "yade", cls)
         else:
             monkeypatch.setitem(base._REGISTRY, "yade", Yade)
-        plan_mod.engine_identity.cache_clear()      # case ids follow the engine's template hash
+        plan_mod.engine_identity.cache_clear()      # case ids follow the engine's recipe id
 
     yield use
     monkeypatch.undo()
@@ -120,7 +120,7 @@ def test_mismapping_alters_only_the_named_parameters():
     changed = {k for k in m if m[k] != b[k]}
     assert changed == {"mu_ps", "krot", "eta", "krot_wall", "mu_r", "E", "E_wall"}
     assert {k: v for k, v in true.items() if k != "material"} == {k: v for k, v in bad.items() if k != "material"}
-    hashes = {Yade().template_hash(), cls().template_hash(), mismapped_yade(friction=1.3)().template_hash()}
+    hashes = {Yade().recipe_id(), cls().recipe_id(), mismapped_yade(friction=1.3)().recipe_id()}
     assert len(hashes) == 3
 
 

@@ -196,28 +196,13 @@ def test_a_changed_recipe_changes_the_device():
     assert b.steps.n_shear == a.steps.n_shear and b.moving == a.moving
 
 
-def test_template_hash_covers_the_recipe_modules(monkeypatch):
-    """The case id changes with the code that decides a case folder's content: the engine module,
-    device, packing, rendering and recipe modules, and YADE's driver module."""
-    from interphase.engines import base
-
-    seen = []
-    monkeypatch.setattr(base, "code_digest", lambda path: seen.append(path.name) or "x")
-    lig, yade = _engines()
-    lig.template_hash()
-    assert seen == ["liggghts.py", "device.py", "packing.py", "render.py", "recipe.py"]
-    seen.clear()
-    yade.template_hash()
-    assert seen == ["yade.py", "device.py", "packing.py", "render.py", "recipe.py", "yade_driver.py"]
-
-
 def test_an_engine_renders_its_recipe_and_its_case_ids_follow_it():
     slow = Recipe(history_points=100)
     base, other = Liggghts(profile=EngineProfile("liggghts")), Liggghts(profile=EngineProfile("liggghts"), recipe=slow)
     a, b = base.render(CASES["box"]), other.render(CASES["box"])
     assert json.loads(b["recipe.json"])["recipe"]["history_points"] == 100
     assert liggghts_device(b)["steps"]["n_history"] > liggghts_device(a)["steps"]["n_history"]
-    assert other.template_hash() != base.template_hash()
+    assert other.recipe_id() != base.recipe_id()
 
 
 def test_side_walls_clear_the_peaks_for_every_study_profile():

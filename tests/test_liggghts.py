@@ -404,24 +404,6 @@ def test_grain_balance_names_a_leak(tmp_path):
     assert "1 grain(s) left the domain by step 100" in check_grain_balance(tmp_path)
 
 
-def test_recipe_code_is_part_of_the_case_identity(tmp_path):
-    """A physics change made in Python (not in a template) must change every case id; a comment or
-    docstring edit must not."""
-    from interphase.engines.base import code_digest
-
-    src = tmp_path / "recipe.py"
-    src.write_text('"""doc"""\nMODEL = "cdt"  # rolling\n')
-    a = code_digest(src)
-    src.write_text('"""other words"""\n# a comment\nMODEL = "cdt"\n')
-    assert code_digest(src) == a
-    src.write_text('"""doc"""\nMODEL = "epsd2"\n')
-    assert code_digest(src) != a
-
-    class Variant(Liggghts):       # same templates, recipe in another module (this file)
-        pass
-    assert Variant().template_hash() != Liggghts().template_hash()
-
-
 def test_dumps_without_blocks_read_as_empty_tables(engine, run, tmp_path):
     folder, _ = _copy_finished(run, tmp_path)
     for name in ("contacts_pair.dump", "contacts_wall.dump", "particles.dump"):

@@ -1,7 +1,7 @@
 """The engine-free Case: every physical input of one simulation, SI units, frozen and hashable.
 
 A Case knows nothing of LIGGGHTS or YADE. Its identity (`case_id`) is the short hash of its
-canonical JSON plus the engine's name, version and template hash: floats canonicalised by
+canonical JSON plus the engine's name and recipe id (Engine.recipe_id): floats canonicalised by
 repr of the round-tripped value, keys sorted (signac style).
 
 Geometry: the soil box is `box_length_d50` × `box_height_d50` (D50 units) in the x–z plane, quasi-2D
@@ -214,10 +214,11 @@ def canonical_json(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
-def case_id(case: Case, engine: str, engine_version: str, template_hash: str, length: int = 12) -> str:
-    """Short hash of the case's canonical inputs plus the engine that runs it."""
-    payload = canonical_json({"case": case.canonical(), "engine": engine,
-                              "engine_version": engine_version, "template": template_hash})
+def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
+    """Short hash of the case's canonical inputs, the engine that runs it and the engine's recipe
+    (Engine.recipe_id: its name, RECIPE_VERSION and the Recipe's values). Probed nowhere: the same
+    on a machine without any engine."""
+    payload = canonical_json({"case": case.canonical(), "engine": engine, "recipe": recipe_id})
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
 
 

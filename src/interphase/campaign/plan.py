@@ -1,8 +1,10 @@
 """Plan: the campaign's cases × engines → `PlannedCase`s with stable ids, folders and flat parameters.
 
-A case id is `interphase.case.case_id(case, engine, engine version, template hash)`: the same inputs
-run by the same engine build and templates get the same id on every machine; a new engine version
-or an edited template gives new ids (and so new folders: old results are never overwritten).
+A case id is `interphase.case.case_id(case, engine, recipe id)`: the same inputs run by the same
+engine and recipe (interphase.recipe.RECIPE_VERSION and the Recipe's values) get the same id on
+every machine, with or without the engine installed; a new recipe version gives new ids (and so new
+folders: old results are never overwritten). The engine build that ran a case is provenance in its
+case.json.
 """
 
 from __future__ import annotations
@@ -31,8 +33,7 @@ class PlannedCase:
     values: tuple = ()                          # the swept values that made it
     pair_id: str | None = None                  # case id of the paired box test (interface cases)
     index: int = 0                              # position in the plan (stable order)
-    engine_version: str = ""
-    template_hash: str = ""
+    recipe_id: str = ""
     params: dict = field(default_factory=dict, compare=False, hash=False)
 
     def meta(self, campaign: str = "") -> dict:
@@ -40,7 +41,7 @@ class PlannedCase:
         return {"case_id": self.case_id, "engine": self.engine, "group": self.group, "role": self.role,
                 "label": self.label, "pair_id": self.pair_id, "campaign": campaign,
                 "values": {k: _jsonable(v) for k, v in self.values}, "params": self.params,
-                "engine_version": self.engine_version, "template_hash": self.template_hash}
+                "recipe_id": self.recipe_id}
 
 
 def _jsonable(v):
@@ -52,12 +53,11 @@ def _jsonable(v):
 
 
 @functools.lru_cache(maxsize=None)
-def engine_identity(name: str) -> tuple[str, str]:
-    """(version, template hash) of an engine, once per process (`liggghts -h` costs ~0.1 s)."""
+def engine_identity(name: str) -> str:
+    """The recipe id of an engine (Engine.recipe_id), once per process; runs no binary."""
     from interphase.engines.base import get_engine
 
-    eng = get_engine(name)
-    return eng.version(), eng.template_hash()
+    return get_engine(name).recipe_id()
 
 
 def flat_params(case: Case) -> dict:
@@ -88,7 +88,7 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
     """Every (case, engine) of the campaign, box tests first (E needs them), in a stable order.
 
     `engines` overrides the campaign's engine list (`campaign run --engine`). `identity(name)` gives
-    (version, template hash); benchmarks may pass a constant one."""
+    the engine's recipe id; benchmarks may pass a constant one."""
     names = tuple(engines) if engines else campaign.engines
     from interphase.campaign.schema import ENGINES
 
@@ -98,15 +98,15 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
     out: list[PlannedCase] = []
     order = sorted(range(len(campaign.cases)), key=lambda i: (campaign.cases[i].role != "box", i))
     for name in names:
-        version, thash = identity(name)
-        ids = {i: case_id(c.case, name, version, thash) for i, c in enumerate(campaign.cases)}
+        rid = identity(name)
+        ids = {i: case_id(c.case, name, rid) for i, c in enumerate(campaign.cases)}
         for i in order:
             c = campaign.cases[i]
             params = flat_params(c.case)
             out.append(PlannedCase(
                 case_id=ids[i], engine=name, case=c.case, group=c.group, role=c.role, label=_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
-                engine_version=version, template_hash=thash, params=params))
+                recipe_id=rid, params=params))
     return out
 
 

@@ -145,7 +145,7 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
             engine = get_engine(engine_name)
         record = {**meta, "case_id": cid, "engine": engine_name, "inputs": case.canonical(), "name": case.name,
                   "provenance": {"package": "interphase-dem", "package_version": __version__,
-                                 "engine_version": engine.version(), "template_hash": engine.template_hash(),
+                                 "engine_version": engine.version(), "recipe_id": engine.recipe_id(),
                                  "host": socket.gethostname(), "pid": os.getpid(), "python": sys.version.split()[0],
                                  "platform": platform.platform(), "slurm_job": _slurm_job()},
                   "host": socket.gethostname(), "slurm_job": _slurm_job(), "started": started, "finished": None}

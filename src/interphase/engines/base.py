@@ -14,10 +14,8 @@ line, the output files it must leave, its log classifier and the pattern of its 
 from __future__ import annotations
 
 import abc
-import ast
 import functools
 import hashlib
-import inspect
 import json
 import os
 import re
@@ -29,7 +27,6 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from interphase import recipe as recipe_module
 from interphase.case import Case
 from interphase.errors import InputError
 from interphase.recipe import RECIPE, Recipe, read_record
@@ -95,10 +92,6 @@ class EngineProfile:
                    timeout=float(timeout) if timeout is not None else None)
 
 
-#: the modules, besides an engine's own, whose code decides what a case folder holds
-RECIPE_MODULES = ("engines/device.py", "engines/packing.py", "engines/render.py", "recipe.py")
-
-
 class Engine(abc.ABC):
     name: str = ""
     label: str = ""                      # the engine's name in messages ("LIGGGHTS")
@@ -107,7 +100,6 @@ class Engine(abc.ABC):
     version_pattern: str = ""            # regex whose group 1 is the version in the binary's output
     version_format: str = "{}"
     template_suffix: str = ""            # of the templates interface_shear<suffix>, direct_shear<suffix>
-    recipe_modules: tuple[str, ...] = RECIPE_MODULES   # paths below the package
 
     def __init__(self, profile: EngineProfile | None = None, templates: str | os.PathLike | None = None,
                  recipe: Recipe = RECIPE):
@@ -121,7 +113,7 @@ class Engine(abc.ABC):
         return EngineProfile.from_env(cls.name)
 
     def version(self) -> str:
-        """Engine version string (part of every case id): the profile's, else from the binary's
+        """Engine version string (provenance in case.json): the profile's, else from the binary's
         banner ('not-installed', 'unknown' when it cannot be read)."""
         if self.profile.version:
             return self.profile.version
@@ -132,24 +124,16 @@ class Engine(abc.ABC):
         m = re.search(self.version_pattern, out) if out is not None else None
         return self.version_format.format(m.group(1).strip()) if m else "unknown"
 
-    def template_hash(self) -> str:
-        """SHA-256 (short) of the recipe: the engine's Recipe values, every template file of this
-        engine (names included) and the code of the Python modules that decide the case folder's
-        content (the engine's module and `recipe_modules`: device, packing, rendering, the Recipe;
-        YADE adds its driver), so that a change of physics made in Python (a rolling model, a wall
-        height) changes every case id as a template edit does. Code is hashed as its syntax tree
-        without docstrings: comments, layout and docstrings do not count."""
-        h = hashlib.sha256()
-        h.update(json.dumps(self.recipe.to_dict(), sort_keys=True).encode())
-        for p in sorted(self.templates.rglob("*")):
-            if p.is_file():
-                h.update(p.relative_to(self.templates).as_posix().encode())
-                h.update(p.read_bytes())
-        package = Path(recipe_module.__file__).parent
-        for src in (Path(inspect.getsourcefile(type(self))), *(package / m for m in self.recipe_modules)):
-            h.update(src.name.encode())
-            h.update(code_digest(src).encode())
-        return h.hexdigest()[:16]
+    def recipe_id(self) -> str:
+        """Short SHA-256 of what decides this engine's case folders besides the Case: the engine's
+        name, interphase.recipe.RECIPE_VERSION and the Recipe's values. Code and templates are not
+        hashed (a refactor that writes the same inputs keeps every finished case); a change that
+        alters what an engine is given must bump RECIPE_VERSION, which tests/test_recipe_version.py
+        enforces. The engine binary's version is provenance (case.json), not identity."""
+        from interphase.recipe import RECIPE_VERSION
+
+        payload = {"engine": self.name, "version": RECIPE_VERSION, "recipe": self.recipe.to_dict()}
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     # -- the contract
     def template_name(self, case: Case) -> str:
@@ -301,21 +285,3 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
             raise
-
-
-@functools.lru_cache(maxsize=None)
-def _code_digest(text: str) -> str:
-    tree = ast.parse(text)
-    for node in ast.walk(tree):
-        body = getattr(node, "body", None)
-        if (isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and body
-                and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
-                and isinstance(body[0].value.value, str)):
-            node.body = body[1:] or [ast.Pass()]
-    return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
-
-
-def code_digest(path: str | os.PathLike) -> str:
-    """SHA-256 of a Python file's syntax tree without docstrings (comments and layout never reach
-    the tree): what the code does, not how it is written or explained."""
-    return _code_digest(Path(path).read_text())

@@ -18,7 +18,7 @@ from pathlib import Path
 import interphase
 from interphase import __version__
 from interphase.case import Case
-from interphase.engines.base import RECIPE_MODULES, Engine, Results, log_tail, not_consolidated, register
+from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
@@ -100,7 +100,6 @@ class Yade(Engine):
     name, label = "yade", "YADE"
     outputs = ("history.csv", "contacts.csv", "particles.csv", "bodies.json")
     version_pattern, version_format = r"[Yy]ade(?: version:)?\s+([0-9][\w.\-]*)", "YADE {}"
-    recipe_modules = (*RECIPE_MODULES, "engines/yade_driver.py")
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:

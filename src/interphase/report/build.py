@@ -84,7 +84,7 @@ def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionMod
 
 
 def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
-    """One line: package, engine and template versions, report template hash, date (UTC)."""
+    """One line: package, engine builds and recipe ids of the cases, report template hash, date (UTC)."""
     from interphase.report.html import template_hash
 
     engines, thash = set(), set()
@@ -94,14 +94,16 @@ def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
                 meta = json.loads((store.case_folder(cid) / "case.json").read_text())
             except (OSError, ValueError):
                 continue
-            engines.add(str(meta.get("engine_version") or meta.get("engine") or "?"))
-            if meta.get("template_hash"):
-                thash.add(str(meta["template_hash"]))
+            prov = meta.get("provenance") or {}
+            engines.add(str(prov.get("engine_version") or meta.get("engine_version") or meta.get("engine") or "?"))
+            rid = prov.get("recipe_id") or meta.get("recipe_id") or meta.get("template_hash")   # older folders
+            if rid:
+                thash.add(str(rid))
     elif summaries is not None and "engine" in summaries:
         engines |= set(summaries["engine"].dropna().astype(str))
     today = _dt.datetime.now(_dt.timezone.utc).date().isoformat()
     return (f"interphase-dem {__version__}; engine {', '.join(sorted(engines)) or 'unknown'}; "
-            f"engine templates {', '.join(sorted(thash)) or 'unknown'}; report template {template_hash()}; {today}")
+            f"recipe {', '.join(sorted(thash)) or 'unknown'}; report template {template_hash()}; {today}")
 
 
 def _profiles_for_polar(campaign, points) -> list[tuple[str, object]]:

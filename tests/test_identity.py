@@ -1,0 +1,39 @@
+"""Case identity travels: a campaign's finished cases read the same on a machine without engines."""
+
+import json
+import os
+
+import pandas as pd
+import pytest
+
+from interphase.campaign import plan as plan_mod
+
+
+@pytest.mark.liggghts
+def test_status_and_report_without_any_engine_on_path(quick_campaign, tmp_path, monkeypatch, capsys):
+    from interphase.cli import main
+
+    assert main(["status", str(quick_campaign), "--json"]) == 0
+    before = json.loads(capsys.readouterr().out)
+    assert before["counts"] == {"done": 6}
+    # a login node / laptop: no liggghts, no yade on PATH (the Python tools stay reachable)
+    empty = tmp_path / "bin"
+    empty.mkdir()
+    monkeypatch.setenv("PATH", str(empty))
+    plan_mod.engine_identity.cache_clear()
+    try:
+        assert main(["status", str(quick_campaign), "--json"]) == 0
+        after = json.loads(capsys.readouterr().out)
+        assert after["counts"] == before["counts"]
+        assert [c["case_id"] for c in after["cases"]] == [c["case_id"] for c in before["cases"]]
+        out = tmp_path / "report"
+        assert main(["report", str(quick_campaign), "--out", str(out), "--bootstrap", "9"]) == 0
+    finally:
+        plan_mod.engine_identity.cache_clear()
+    ens = pd.read_csv(out / "tables" / "ensembles.csv")
+    assert len(ens) == 2 and ens["E"].notna().all()
+    # the engine build that ran each case is kept as provenance
+    folder = quick_campaign.parent / "runs" / before["cases"][0]["case_id"]
+    prov = json.loads((folder / "case.json").read_text())["provenance"]
+    assert prov["engine_version"].startswith("LIGGGHTS") and len(prov["recipe_id"]) == 16
+    assert os.environ["PATH"] == str(empty)
