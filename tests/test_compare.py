@@ -52,9 +52,9 @@ def test_compare_shifted_ensemble_differs_on_its_metric_only():
     rows = []
     for seed in (1, 2, 3, 4):
         rows.append(dict(case="box-x", case_id=f"b{seed}", seed=seed, test="box", pair_id=None, peak=0.40 + 0.005 * seed,
-                         critical=0.36, theta_r_deg=np.nan, surface_contacts=np.nan))
+                         critical=0.36, theta_r_deg=np.nan, surface_contacts_per_d50=np.nan))
         rows.append(dict(case="iface-x", case_id=f"i{seed}", seed=seed, test="interface", pair_id=f"b{seed}",
-                         peak=0.39 + 0.004 * seed, critical=0.37, theta_r_deg=30 + seed * 0.1, surface_contacts=60 + seed))
+                         peak=0.39 + 0.004 * seed, critical=0.37, theta_r_deg=30 + seed * 0.1, surface_contacts_per_d50=1.5 + 0.01 * seed))
     ref = pd.DataFrame(rows)
     ref["E"] = ref["peak"] / 0.41
     ref["E_cs"] = ref["critical"] / 0.36

@@ -37,3 +37,14 @@ def test_status_and_report_without_any_engine_on_path(quick_campaign, tmp_path, 
     prov = json.loads((folder / "case.json").read_text())["provenance"]
     assert prov["engine_version"].startswith("LIGGGHTS") and len(prov["recipe_id"]) == 16
     assert os.environ["PATH"] == str(empty)
+
+
+@pytest.mark.liggghts
+def test_status_table_fits_80_columns(quick_campaign, monkeypatch, capsys):
+    from interphase.cli import main
+
+    monkeypatch.setenv("COLUMNS", "80")
+    assert main(["status", str(quick_campaign)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 2 + 6                      # title, header, one line per case
+    assert max(len(line.rstrip()) for line in lines) <= 80

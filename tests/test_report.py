@@ -5,6 +5,7 @@ output when it is there."""
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -160,3 +161,18 @@ def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
     assert len(ens) == 2 and (ens["seeds"] == 2).all() and (ens["box_seeds"] == 2).all()
     assert ((ens["E_lo"] <= ens["E"]) & (ens["E"] <= ens["E_hi"])).all()
     assert ((ens["tan_delta_lo"] < ens["tan_delta"]) & (ens["tan_delta"] < ens["tan_delta_hi"])).all()
+
+
+@pytest.mark.liggghts
+def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp_path):
+    from interphase.report.build import build_report
+
+    res = build_report(quick_campaign, out=tmp_path / "rep", n_boot=9)
+    s = pd.read_csv(res.folder / "tables" / "summaries.csv")
+    assert len(s) == 6 and list(s.columns[:4]) == ["case_id", "label", "group", "test"]
+    assert {"peak_stress_ratio", "theta_a_deg_92", "theta_r_surface_deg", "seed", "gradation", "friction_ps"} <= set(s.columns)
+    box = s[s["test"].eq("box")].set_index("case_id")["peak_stress_ratio"]
+    iface = s[s["test"].eq("interface")]
+    assert np.allclose(iface["efficiency"], iface["peak_stress_ratio"].to_numpy() / box.loc[iface["pair_id"]].to_numpy(),
+                       rtol=1e-5)
+    assert s.loc[s["test"].eq("box"), "efficiency"].isna().all()

@@ -308,14 +308,19 @@ def _cmd_campaign_status(args) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title=f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())))
-    for col in ("case_id", "engine", "group", "label", "status", "cause", "message"):
-        table.add_column(col, overflow="fold")
+    # one line per case in 80 columns: short ids, labels cut at the end (full ids, labels and
+    # messages in --json)
+    table = Table(title=f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())),
+                  box=None, pad_edge=False, title_justify="left")
+    table.add_column("id", no_wrap=True, min_width=8)
+    table.add_column("engine", no_wrap=True, min_width=8)
+    table.add_column("label", no_wrap=True, overflow="ellipsis", ratio=1)
+    table.add_column("status", no_wrap=True, min_width=9)
+    table.add_column("cause", no_wrap=True, overflow="ellipsis", max_width=14)
     for r in df.itertuples():
-        msg = "" if not isinstance(r.message, str) else r.message[:80]
-        table.add_row(r.case_id, r.engine, str(r.group), r.label, r.status,
-                      r.cause if isinstance(r.cause, str) else "", msg)
-    Console().print(table)
+        table.add_row(str(r.case_id)[:8], r.engine, r.label, r.status, r.cause if isinstance(r.cause, str) else "")
+    console = Console()
+    console.print(table, width=max(80, min(console.width, 120)), crop=True)
     return 0
 
 

@@ -161,15 +161,21 @@ def physical_case(label: str) -> str:
     return re.sub(r"-s\d+$", "", str(label))
 
 
-def seed_peak_states(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
-                     grid_points: int = GRID_POINTS) -> np.ndarray:
+def seed_states(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
+                grid_points: int = GRID_POINTS) -> tuple[np.ndarray, np.ndarray]:
     """Each seed's "peak state" (its mean ratio over the smoothing window at the seed-mean curve's
-    peak, see the module doc), aligned with `curves`; NaN for an entry that is None or has fewer than
-    two finite ratios. Their mean is `ensemble_strength(curves, window).peak`, and resampling them is
-    how `ensemble_efficiency` and the correlations' seed bootstrap vary the peak."""
-    out = np.full(len(curves), np.nan)
+    peak, see the module doc) and its critical state (mean over the last `critical_fraction`),
+    aligned with `curves`; NaN for an entry that is None or has fewer than two finite ratios. Their
+    means are `ensemble_strength(curves, window)`'s peak and critical; resampling them is how
+    `ensemble_efficiency` and the correlations' seed bootstrap vary the strength."""
+    peaks, crits = np.full(len(curves), np.nan), np.full(len(curves), np.nan)
     ok = [i for i, c in enumerate(curves) if c is not None and np.isfinite(np.asarray(c[1], float)).sum() >= 2]
     if ok:
-        peaks, _, _ = _states([curves[i] for i in ok], window, critical_fraction, grid_points)
-        out[ok] = peaks
-    return out
+        p, _, c = _states([curves[i] for i in ok], window, critical_fraction, grid_points)
+        peaks[ok], crits[ok] = p, c
+    return peaks, crits
+
+
+def seed_peak_states(curves, window: float, **kw) -> np.ndarray:
+    """The peak half of `seed_states`."""
+    return seed_states(curves, window, **kw)[0]

@@ -9,64 +9,50 @@ values, each at its own ensemble's reading (analysis.ensemble):
   tan_delta_cs, tan_phi_cs  the seed's mean ratio over the last 40 % of the shear
   E, E_cs                   the seed's interface value over its own box test's (pair_id)
   theta_r_deg               θr at the surface at the run's peak snapshot [deg]
-  surface_contacts          contacts on the surface at that snapshot [-]
+  surface_contacts_per_d50  contacts on the surface at that snapshot per D50 of surface [1/D50]
+                            (per length: a longer cell has proportionally more)
 The two campaigns' specimens are different after consolidation even on the same seed, so the
 comparison is unpaired (Welch).
 """
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from interphase.analysis.difference import difference
-from interphase.analysis.ensemble import CRITICAL_FRACTION, GRID_POINTS, _states
+from interphase.analysis.ensemble import physical_case, seed_states
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 # what a change must stay within to count as "no effect" (docs/convergence.md says why)
 TOLERANCES = {"tan_delta": 0.03, "tan_delta_cs": 0.03, "tan_phi": 0.03, "tan_phi_cs": 0.03,
-              "E": 0.05, "E_cs": 0.05, "theta_r_deg": 3.0, "surface_contacts": 0.10}
-RELATIVE = {"surface_contacts"}     # tolerance as a fraction of the reference mean
+              "E": 0.05, "E_cs": 0.05, "theta_r_deg": 3.0, "surface_contacts_per_d50": 0.10}
+RELATIVE = {"surface_contacts_per_d50"}     # tolerance as a fraction of the reference mean
 COLUMNS = ("case", "metric", "ref", "ref_lo", "ref_hi", "value", "value_lo", "value_hi", "change", "change_lo",
            "change_hi", "tol", "verdict", "n_ref", "n_value", "seeds_needed")
-
-
-def physical(label: str) -> str:
-    return re.sub(r"-s\d+$", "", str(label))
-
-
-def _curve(store, case_id: str):
-    try:
-        s = pd.read_parquet(store.case_folder(str(case_id)) / "series.parquet", columns=["shear_disp", "stress_ratio"])
-    except (OSError, ValueError, KeyError):
-        return None
-    x, r = s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)
-    return (x, r) if np.isfinite(r).sum() >= 2 else None
 
 
 def seed_values(summaries: pd.DataFrame, store) -> pd.DataFrame:
     """One row per finished run: physical case, seed, test, pair_id and the per-seed values above
     (E filled in for interface runs whose box test is present)."""
     done = summaries[summaries["status"].eq("done")] if "status" in summaries else summaries
-    done = done.assign(_phys=done["label"].map(physical))
-    rows = []
+    done = done.assign(_phys=done["label"].map(physical_case))
+    frames = []
     for phys, g in done.groupby("_phys", sort=True):
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median())
-        curves = [(_curve(store, cid), r) for cid, r in zip(g["case_id"], g.itertuples(index=False))]
-        ok = [(c, r) for c, r in curves if c is not None]
-        if not ok:
-            continue
-        peaks, _, crits = _states([c for c, _ in ok], PEAK_WINDOW_D50 * d50, CRITICAL_FRACTION, GRID_POINTS)
-        for (_, r), p, c in zip(ok, peaks, crits):
-            rows.append(dict(case=phys, case_id=str(r.case_id), seed=int(r.seed), test=r.test,
-                             pair_id=getattr(r, "pair_id", None), peak=float(p), critical=float(c),
-                             theta_r_deg=float(getattr(r, "theta_r_surface_deg", np.nan)),
-                             surface_contacts=float(getattr(r, "n_contacts_surface", np.nan))))
-    out = pd.DataFrame(rows, columns=["case", "case_id", "seed", "test", "pair_id", "peak", "critical",
-                                      "theta_r_deg", "surface_contacts"])
+        peaks, crits = seed_states([store.curve(cid) for cid in g["case_id"]], PEAK_WINDOW_D50 * d50)
+        num = lambda col: pd.to_numeric(g[col], errors="coerce") if col in g else pd.Series(np.nan, index=g.index)
+        cell_d50 = (num("region_x1") - num("region_x0")) / d50          # the surface under the soil [D50]
+        frames.append(pd.DataFrame({
+            "case": phys, "case_id": g["case_id"].astype(str), "seed": g["seed"].astype(int), "test": g["test"],
+            "pair_id": g["pair_id"] if "pair_id" in g else None, "peak": peaks, "critical": crits,
+            "theta_r_deg": num("theta_r_surface_deg"),
+            "surface_contacts_per_d50": num("n_contacts_surface") / cell_d50.where(cell_d50 > 0)}))
+    cols = ["case", "case_id", "seed", "test", "pair_id", "peak", "critical", "theta_r_deg", "surface_contacts_per_d50"]
+    out = pd.concat(frames, ignore_index=True)[cols] if frames else pd.DataFrame(columns=cols)
+    out = out[out["peak"].notna() | out["critical"].notna()].reset_index(drop=True)
     box = out[out["test"].eq("box")].set_index("case_id")
     iface = out["test"].eq("interface")
     pid = out.loc[iface, "pair_id"].astype(str)
@@ -80,7 +66,7 @@ def _metrics(test: str) -> dict[str, str]:
     if test == "box":
         return {"tan_phi": "peak", "tan_phi_cs": "critical"}
     return {"tan_delta": "peak", "tan_delta_cs": "critical", "E": "E", "E_cs": "E_cs",
-            "theta_r_deg": "theta_r_deg", "surface_contacts": "surface_contacts"}
+            "theta_r_deg": "theta_r_deg", "surface_contacts_per_d50": "surface_contacts_per_d50"}
 
 
 def compare(ref: pd.DataFrame, variant: pd.DataFrame, tolerances: dict | None = None) -> pd.DataFrame:

@@ -313,5 +313,13 @@ class CampaignStore:
         summ = summ[[c for c in summ.columns if c not in base.columns and c not in params.columns]]
         return pd.concat([base, params, summ], axis=1)
 
+    def curve(self, case_id: str):
+        """(shear_disp [m], stress_ratio [-]) of a finished case's series.parquet, None if unreadable."""
+        try:
+            s = pd.read_parquet(self.case_folder(str(case_id)) / "series.parquet", columns=["shear_disp", "stress_ratio"])
+        except (OSError, ValueError, KeyError):
+            return None
+        return s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)
+
     def counts(self) -> dict[str, int]:
         return dict(self._db.execute("SELECT status, COUNT(*) FROM cases GROUP BY status").fetchall())

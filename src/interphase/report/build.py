@@ -151,6 +151,31 @@ def _curves(store, rows: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return out
 
 
+#: first in summaries.csv: a run's identity and physical case; then every other column of the index
+#: (Case parameters, the summary's own columns by their names, elapsed [s]) but its bookkeeping
+RUN_COLUMNS = ("case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
+               "pair_id")
+BOOKKEEPING = ("status", "cause", "started", "finished", "attempts", "host", "slurm_job", "updated", "role",
+               "case", "reasons", "engine")
+
+
+def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
+    """Every finished run as one row of a small CSV (what a reproduction commits: no dumps): the
+    columns above, the rest by their own names, and `efficiency` = this run's peak stress ratio over
+    its paired box test's (same packing seed; NaN for box tests). Sorted by group and label, so a
+    rerun diffs cleanly."""
+    df = summaries.copy()
+    peak = pd.to_numeric(df.get("peak_stress_ratio"), errors="coerce")
+    by_id = pd.Series(peak.to_numpy(), index=df["case_id"].astype(str))
+    box_peak = df["pair_id"].astype(str).map(by_id) if "pair_id" in df else pd.Series(math.nan, index=df.index)
+    df["efficiency"] = peak / pd.to_numeric(box_peak, errors="coerce")
+    first = [c for c in RUN_COLUMNS if c in df]
+    rest = [c for c in df.columns if c not in first and c not in BOOKKEEPING]
+    df = df[first + rest].sort_values(["group", "label"], kind="stable")
+    df.to_csv(path, index=False, float_format="%.6g")
+    return path
+
+
 def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=None, store=None,
                           lab: str | Path | None = None, n_boot: int = 199, seed: int = 0,
                           title: str | None = None) -> ReportResult:
@@ -179,6 +204,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     res.fits = fits
     (out / "correlations.json").write_text(json.dumps([_clean(fr.row()) for fr in fits], indent=1, allow_nan=False))
     res.files.append(out / "correlations.json")
+
+    if len(summaries):
+        res.files.append(write_summaries(summaries, tdir / "summaries.csv"))
 
     # ---- tables
     tables: list[T.Table] = []

@@ -26,14 +26,6 @@ COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "
 __all__ = ["COLUMNS", "ensemble_table", "ensemble_tables", "physical_case"]
 
 
-def _curve(store, case_id: str):
-    try:
-        s = pd.read_parquet(store.case_folder(str(case_id)) / "series.parquet", columns=["shear_disp", "stress_ratio"])
-    except (OSError, ValueError, KeyError):
-        return None
-    return s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)
-
-
 def _mean_interval(values) -> tuple[float, float, float]:
     v = np.asarray([x for x in values if x is not None and math.isfinite(x)], float)
     if v.size == 0:
@@ -70,7 +62,7 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
     by_id = rows.set_index(rows["case_id"].astype(str))
     iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
     cache: dict = {}
-    curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, _curve(store, cid))
+    curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, store.curve(cid))
     out, states = [], {}
     for (group, name), g in iface.groupby(["group", "_case"], sort=True):
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
