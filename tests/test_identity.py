@@ -48,3 +48,18 @@ def test_status_table_fits_80_columns(quick_campaign, monkeypatch, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 2 + 6                      # title, header, one line per case
     assert max(len(line.rstrip()) for line in lines) <= 80
+
+
+@pytest.mark.liggghts
+def test_report_reads_runs_written_elsewhere(quick_campaign, tmp_path, monkeypatch):
+    # the campaign file as a colleague has it (no output line), the runs copied from the cluster
+    from interphase.cli import main
+
+    text = "\n".join(line for line in quick_campaign.read_text().splitlines() if not line.startswith("output ="))
+    mine = tmp_path / "quick.toml"
+    mine.write_text(text)
+    runs = quick_campaign.parent / "runs"
+    assert main(["report", str(mine), "--output", str(runs), "--out", str(tmp_path / "rep"), "--bootstrap", "9"]) == 0
+    assert len(pd.read_csv(tmp_path / "rep" / "tables" / "summaries.csv")) == 6
+    monkeypatch.chdir(tmp_path)                          # ./runs/quick (the default) is not there
+    assert main(["report", str(mine), "--out", str(tmp_path / "rep2")]) == 2

@@ -357,7 +357,9 @@ def _cmd_crosscheck(args) -> int:
 def _add_report(sub) -> None:
     p = sub.add_parser("report", help="tables (CSV/Markdown/LaTeX), figures 6.3–6.10 (PNG/PDF), fits and an HTML page")
     p.add_argument("campaign", help="campaign file (TOML) whose cases have run")
-    p.add_argument("--out", default=None, help="output folder (default: the campaign's output folder/report)")
+    p.add_argument("--out", default=None, help="report folder (default: the campaign's output folder/report)")
+    p.add_argument("--output", default=None, help="the campaign's runs folder, if not where the file says "
+                   "(as given to `campaign run --output`)")
     p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
                    "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
     p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
@@ -418,7 +420,7 @@ def _cmd_report(args) -> int:
 
     if args.bootstrap < 0:
         raise InputError(f"must be ≥ 0, got {args.bootstrap}", where="--bootstrap")
-    res = build_report(args.campaign, out=args.out, lab=args.lab, n_boot=args.bootstrap)
+    res = build_report(args.campaign, out=args.out, lab=args.lab, n_boot=args.bootstrap, output=args.output)
     if args.json:
         _print_json({"folder": str(res.folder), "files": [str(f) for f in res.files], "warnings": res.warnings})
         return 0

@@ -331,12 +331,13 @@ def _clean(d: dict) -> dict:
                 v.item() if isinstance(v, np.generic) else v) for k, v in d.items()}
 
 
-def open_campaign(campaign_path: str | Path):
-    """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run."""
+def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
+    """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
+    runs' folder when not where the file says, as `campaign run --output` wrote them)."""
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    campaign = load_campaign(campaign_path)
+    campaign = load_campaign(campaign_path, output=output)
     root = Path(campaign.output)
     if not (root / "index.sqlite").exists() and not any(root.glob("*/DONE")):
         raise InputError(f"no results in {root}", where=str(campaign_path),
@@ -346,8 +347,8 @@ def open_campaign(campaign_path: str | Path):
 
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
-                 n_boot: int = 199) -> ReportResult:
-    campaign, store, summ = open_campaign(campaign_path)
+                 n_boot: int = 199, output: str | Path | None = None) -> ReportResult:
+    campaign, store, summ = open_campaign(campaign_path, output)
     try:
         return report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
                                      lab=lab, n_boot=n_boot)
