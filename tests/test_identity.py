@@ -63,3 +63,25 @@ def test_report_reads_runs_written_elsewhere(quick_campaign, tmp_path, monkeypat
     assert len(pd.read_csv(tmp_path / "rep" / "tables" / "summaries.csv")) == 6
     monkeypatch.chdir(tmp_path)                          # ./runs/quick (the default) is not there
     assert main(["report", str(mine), "--out", str(tmp_path / "rep2")]) == 2
+
+
+def test_a_case_run_again_under_a_new_recipe_is_counted_once(tmp_path):
+    from interphase.campaign.plan import plan
+    from interphase.campaign.schema import load_campaign
+    from interphase.report.build import one_run_per_case
+
+    f = tmp_path / "c.toml"
+    f.write_text('[campaign]\nname = "c"\nengines = ["liggghts"]\n[case]\ntest = "interface"\n'
+                 'profile = {kind = "flat"}\nn_grains = 50\n[sweep]\nseed = [1, 2]\n[pairs]\nbox = false\n')
+    c = load_campaign(f)
+    a, b = plan(c, identity=lambda name: "new-recipe")
+    old_a = next(iter(plan(c, identity=lambda name: "old-recipe")))
+    rows = pd.DataFrame([
+        dict(case_id=a.case_id, label=a.label, engine="liggghts", finished=1.0, peak_stress_ratio=0.30),
+        dict(case_id=old_a.case_id, label=a.label, engine="liggghts", finished=2.0, peak_stress_ratio=0.31),
+        dict(case_id="0ld0b", label=b.label, engine="liggghts", finished=3.0, peak_stress_ratio=0.32),  # no new run yet
+        dict(case_id="gone", label="a-label-no-longer-asked-for", engine="liggghts", finished=4.0, peak_stress_ratio=0.9),
+    ])
+    out = one_run_per_case(rows, c, identity=lambda name: "new-recipe")
+    assert sorted(out["case_id"]) == sorted([a.case_id, "0ld0b"])        # this recipe's run first
+    assert out.attrs == {"left_out": 2, "earlier_recipe": 1}

@@ -343,17 +343,49 @@ def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
         raise InputError(f"no results in {root}", where=str(campaign_path),
                          fix=f"run `campaign run {campaign_path}` first")
     store = CampaignStore(root)
-    return campaign, store, store.summaries()
+    return campaign, store, one_run_per_case(store.summaries(), campaign)
+
+
+def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.DataFrame:
+    """The finished runs a campaign file asks for, one per (label, engine): the run whose id the
+    current plan gives (this recipe) when it has finished, else the most recently finished one of
+    that label (an earlier recipe's, kept rather than rerun). Folders of labels the file no longer
+    asks for, and repeats of one label (a case run again under a new recipe), are left out;
+    `attrs["left_out"]` counts them and `attrs["earlier_recipe"]` the runs used from an earlier
+    recipe. Without this, a rerun under a new recipe counted every seed twice. `plan_options` go to
+    campaign.plan.plan (a test's recipe identity)."""
+    from interphase.campaign.plan import plan
+
+    if summaries.empty:
+        summaries.attrs.update(left_out=0, earlier_recipe=0)
+        return summaries
+    planned = plan(campaign, **plan_options)
+    ids = {p.case_id for p in planned}
+    wanted = {(p.label, p.engine) for p in planned}
+    keys = list(zip(summaries["label"].astype(str), summaries["engine"].astype(str)))
+    df = summaries[[k in wanted for k in keys]].copy()
+    df["_current"] = df["case_id"].astype(str).isin(ids)
+    df = df.sort_values(["_current", "finished"], ascending=False, kind="stable")
+    out = df.drop_duplicates(["label", "engine"]).sort_index()
+    out.attrs.update(left_out=len(summaries) - len(out), earlier_recipe=int((~out["_current"]).sum()))
+    return out.drop(columns="_current")
 
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
                  n_boot: int = 199, output: str | Path | None = None) -> ReportResult:
     campaign, store, summ = open_campaign(campaign_path, output)
     try:
-        return report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
-                                     lab=lab, n_boot=n_boot)
+        res = report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
+                                    lab=lab, n_boot=n_boot)
     finally:
         store.close()
+    if summ.attrs.get("left_out"):
+        res.warnings.append(f"{summ.attrs['left_out']} finished folder(s) left out: labels the file no longer asks "
+                            "for, or repeats of a case (one run per label is used, this recipe's first)")
+    if summ.attrs.get("earlier_recipe"):
+        res.warnings.append(f"{summ.attrs['earlier_recipe']} run(s) come from an earlier recipe (no run of this "
+                            "recipe yet): see the provenance line for the recipe ids")
+    return res
 
 
 def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel:
