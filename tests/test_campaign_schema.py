@@ -71,7 +71,7 @@ def test_allowed_values_and_did_you_mean_are_given():
 def test_groups_1_to_3_reproduce_table_6_1(group, variable, values):
     c = load_campaign(CAMPAIGNS / f"group{group}.toml")
     inter = [x for x in c.cases if x.role == "interface"]
-    assert len(inter) == len(values) * 3 * 2
+    assert len(inter) == len(values) * 3 * 2 * 3
     assert sorted({x.case.profile.param(variable) for x in inter}) == sorted(values)
     const = {"rt": 1.0, "sr": 0.0, "sw": 2.0}
     for x in inter:
@@ -82,9 +82,9 @@ def test_groups_1_to_3_reproduce_table_6_1(group, variable, values):
     assert {x.case.gradation.name for x in inter} == {"mono", "poly"}
     assert {(x.case.friction_pp, x.case.friction_pw, x.case.density, x.case.poisson) for x in inter} == \
         {(0.5, 0.9, 2650.0, 0.3)}
-    # one box test per soil (gradation), shared by every surface and friction
+    # one box test per soil (gradation and packing seed), shared by every surface and friction
     boxes = [x for x in c.cases if x.role == "box"]
-    assert len(boxes) == 2 and all(x.pair is not None and c.cases[x.pair].role == "box" for x in inter)
+    assert len(boxes) == 2 * 3 and all(x.pair is not None and c.cases[x.pair].role == "box" for x in inter)
 
 
 def test_group4_reproduces_table_6_2():
@@ -93,7 +93,22 @@ def test_group4_reproduces_table_6_2():
            for x in c.cases if x.role == "interface"}
     assert exp == {"A": (1, 1, 2), "B": (2, 1, 2), "C": (2, 0.5, 2), "D": (4, 2, 4), "E": (2, 0.25, 1),
                    "F": (4, 0.25, 2), "G": (4, 4, 4)}
-    assert sum(x.role == "interface" for x in c.cases) == 7 * 3 * 2
+    assert sum(x.role == "interface" for x in c.cases) == 7 * 3 * 2 * 3
+
+
+def test_group_files_share_the_study_settings():
+    # the settings docs/convergence.md chose are in campaigns/study.toml; the per-group files must
+    # not drift from them (profiles, gradations and frictions are each file's own)
+    own = {"profile", "gradation", "friction_ps", "name"}
+    ref = next(x.case for x in load_campaign(CAMPAIGNS / "study.toml").cases if x.role == "interface")
+    keep = {k: v for k, v in ref.canonical().items() if k not in own and k != "seed"}
+    for g in range(1, 6):
+        c = load_campaign(CAMPAIGNS / f"group{g}.toml")
+        for x in c.cases:
+            if x.role == "interface":
+                got = {k: v for k, v in x.case.canonical().items() if k in keep}
+                assert got == keep, (g, {k: (got[k], keep[k]) for k in keep if got[k] != keep[k]})
+        assert {x.case.seed for x in c.cases} == {1, 2, 3}
 
 
 def test_group5_reads_profile_files_relative_to_the_campaign(tmp_path):
@@ -199,7 +214,7 @@ def test_real_ids_are_stable_across_loads_and_working_directories(tmp_path, monk
     first = [p.case_id for p in plan(load_campaign(CAMPAIGNS / "group1.toml"))]
     monkeypatch.chdir(tmp_path)
     again = [p.case_id for p in plan(load_campaign(CAMPAIGNS / "group1.toml"))]
-    assert first == again and len(set(first)) == len(first) == 56
+    assert first == again and len(set(first)) == len(first) == 168
 
 
 def test_time_limits_grow_with_case_size():
