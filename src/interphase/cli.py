@@ -363,6 +363,9 @@ def _add_report(sub) -> None:
     p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
                    "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
     p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
+    p.add_argument("--animate", action="append", default=None, metavar="LABEL_OR_ID",
+                   help="write only figures/animation_<label>.gif of this run (label or case id; repeatable): "
+                   "the force network at every contact snapshot beside the stress-ratio curve")
     p.add_argument("--json", action="store_true", help="print JSON (files, warnings)")
     p.set_defaults(func=_cmd_report)
 
@@ -420,6 +423,16 @@ def _cmd_report(args) -> int:
 
     if args.bootstrap < 0:
         raise InputError(f"must be ≥ 0, got {args.bootstrap}", where="--bootstrap")
+    if args.animate:
+        from interphase.report.build import build_animations
+
+        paths = build_animations(args.campaign, args.animate, out=args.out, output=args.output)
+        if args.json:
+            _print_json({"files": [str(p) for p in paths], "warnings": []})
+        else:
+            for p in paths:
+                print(f"wrote {p}")
+        return 0
     res = build_report(args.campaign, out=args.out, lab=args.lab, n_boot=args.bootstrap, output=args.output)
     if args.json:
         _print_json({"folder": str(res.folder), "files": [str(f) for f in res.files], "warnings": res.warnings})

@@ -273,7 +273,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
                 add(f"Stress ratio vs shear displacement, {grp}",
                     F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ({len(curves)} cases)",
                                     f"curves_{T._safe(grp)}", fdir))
-        add_net = _networks(store, runs, fdir, res)
+        add_net = _networks(store, runs, fdir, res, campaign)
         figs += add_net
     for _, paths in figs:
         res.files += paths
@@ -294,32 +294,60 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     return res
 
 
-def _networks(store, points: pd.DataFrame, fdir: Path, res: ReportResult) -> list:
-    """Force network at the peak snapshot of the strongest and the weakest interface case."""
-    from interphase.report.network import draw_network
+def _networks(store, points: pd.DataFrame, fdir: Path, res: ReportResult, campaign=None) -> list:
+    """Force network at the peak snapshot (summary `peak_snapshot`) of the strongest and the weakest
+    interface case: grains to scale, the surface as sheared, the window (report.network)."""
+    from interphase.report.network import case_network, run_case
 
     out = []
     cand = points.assign(_p=pd.to_numeric(points.get("peak_stress_ratio"), errors="coerce")).dropna(subset=["_p"])
+    if "test" in cand:
+        cand = cand[cand["test"].astype(str) == "interface"]
     if cand.empty or "peak_snapshot" not in cand:
         return out
     cand = cand.sort_values("_p")
     chosen = [cand.iloc[-1]] + ([cand.iloc[0]] if len(cand) > 1 else [])
     for r in chosen[:NETWORK_CASES]:
-        path = store.case_folder(str(r["case_id"])) / "contacts.parquet"
+        folder = store.case_folder(str(r["case_id"]))
         snap = r.get("peak_snapshot")
-        if not path.exists() or snap is None or (isinstance(snap, float) and not math.isfinite(snap)):
+        if not (folder / "contacts.parquet").exists() or snap is None or \
+                (isinstance(snap, float) and not math.isfinite(snap)):
             res.warnings.append(f"no force network for {r['label']}: no contacts.parquet or peak snapshot")
             continue
-        contacts = pd.read_parquet(path)
         png = fdir / f"network_{T._safe(r['label'])}.png"
+        case = run_case(folder, campaign, str(r["label"]))
+        if case is None:
+            res.warnings.append(f"force network of {r['label']} drawn without its surface: its Case could not be rebuilt")
         try:
-            draw_network(contacts, int(snap), png, title=f"{r['label']}\npeak: snapshot {int(snap)}, "
+            case_network(folder, int(snap), png, case=case, title=f"{r['label']}\npeak: snapshot {int(snap)}, "
                          f"tan δ = {r['_p']:.3f}")
         except InputError as exc:
             res.warnings.append(f"no force network for {r['label']}: {exc}")
             continue
         out.append((f"Force network at peak: {r['label']} (tan δ = {r['_p']:.3f})", [png]))
     return out
+
+
+def build_animations(campaign_path: str | Path, keys, out: str | Path | None = None,
+                     output: str | Path | None = None) -> list[Path]:
+    """`campaign report --animate`: for each label or case id in `keys`, <out>/figures/
+    animation_<label>.gif (report.network.animate_case). An unknown key fails (InputError) before
+    anything is drawn."""
+    from interphase.report.network import animate_case, find_run, run_case
+
+    campaign, store, summ = open_campaign(campaign_path, output)
+    try:
+        rows = [find_run(summ, k) for k in keys]
+        fdir = Path(out or Path(campaign.output) / "report") / "figures"
+        paths = []
+        for r in rows:
+            folder = store.case_folder(str(r["case_id"]))
+            label = str(r["label"])
+            paths.append(animate_case(folder, fdir / f"animation_{T._safe(label)}.gif",
+                                      case=run_case(folder, campaign, label), title=label))
+    finally:
+        store.close()
+    return paths
 
 
 def _html_table(df: pd.DataFrame) -> str:
