@@ -7,8 +7,13 @@
    case.json). Also reported: the runner's own work around the engine (write_input, read_results,
    parquet, summary, DONE) with a stand-in Engine whose execute runs `true` — a stand-in is allowed
    in a benchmark, never in the tests that prove the features.
+3. Status of a 400-case campaign whose folders are all finished (stand-in engine, real Parquet
+   tables): verification of every folder (case.json hashed against the folder's name, every table's
+   Parquet footer) on an index rebuilt from scratch; then a status with every verdict cached (stat
+   of the files only); then with one folder's table touched (that one verified again).
 
     .venv/bin/python bench/bench_campaign.py
+    .venv/bin/python bench/bench_campaign.py status     # 3. only
 """
 
 from __future__ import annotations
@@ -155,6 +160,37 @@ def bench_local_pool(tmp: Path) -> dict:
             "stage_mean_ms": {k: 1e3 * v / n for k, v in stages.items()}}
 
 
+def bench_status_verify(tmp: Path, n_seeds: int = 4) -> dict:
+    import os
+
+    from interphase.case import case_id
+
+    f = tmp / "v.toml"
+    rts = ", ".join(f"{0.1 + 0.2 * i:.1f}" for i in range(25))
+    f.write_text(BIG % (rts, ", ".join(str(i) for i in range(1, n_seeds + 1))))
+    camp = load_campaign(f, output=tmp / "verify-out")
+    eng, rid = StandIn(), "0" * 16
+    for c in camp.cases:
+        cid = case_id(c.case, "standin", rid)
+        run_case(c.case, "standin", camp.output / cid, {"case_id": cid, "recipe_id": rid}, engine=eng)
+    n = len(camp.cases)
+    t = time.perf_counter()
+    with CampaignStore(camp.output) as store:       # no index: rebuilt, every folder verified
+        t1 = time.perf_counter()
+        df = store.status()
+        t2 = time.perf_counter()
+        assert (df["status"] == "done").all() and len(df) == n, df["status"].value_counts()
+        df = store.status()                          # every verdict cached
+        t3 = time.perf_counter()
+        one = next(p for p in camp.output.iterdir() if (p / "DONE").exists()) / "contacts.parquet"
+        os.utime(one)
+        t4 = time.perf_counter()
+        df = store.status()                          # one folder verified again
+        t5 = time.perf_counter()
+    return {"cases": n, "rebuild_verify_all_s": t1 - t, "first_status_s": t2 - t1, "status_cached_s": t3 - t2,
+            "status_one_touched_s": t5 - t4, "verify_ms_per_folder": 1e3 * (t1 - t) / n}
+
+
 def _write(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
@@ -163,8 +199,11 @@ def _write(path: Path, text: str) -> Path:
 def main() -> None:
     tmp = Path(tempfile.mkdtemp(prefix="bench-campaign-"))
     try:
-        res = {"planning_10k": bench_planning(tmp), "runner_standin": bench_runner_standin(tmp),
-               "local_pool_liggghts": bench_local_pool(tmp)}
+        if sys.argv[1:] == ["status"]:
+            res = {"status_verify_400": bench_status_verify(tmp)}
+        else:
+            res = {"planning_10k": bench_planning(tmp), "runner_standin": bench_runner_standin(tmp),
+                   "local_pool_liggghts": bench_local_pool(tmp), "status_verify_400": bench_status_verify(tmp)}
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     json.dump(res, sys.stdout, indent=1)

@@ -4,7 +4,9 @@
 
 The campaign lock (filelock) makes a second `campaign run` of the same campaign stop with a clear
 message. Finished cases (DONE) are never rerun; failed and SLURM-killed ones only with
-`rerun_failed`; interrupted and incomplete ones always (they never finished).
+`rerun_failed`, and so are corrupt ones (DONE, but the folder does not verify: store.verify_folder;
+their DONE is removed first so that the runner cleans the folder); interrupted and incomplete ones
+always (they never finished).
 """
 
 from __future__ import annotations
@@ -47,13 +49,22 @@ class RunReport:
         return 0 if all(s == "done" for s in self.statuses.values()) and not self.skipped_failed else 1
 
 
+def _state(store: st.CampaignStore, indexed: dict, case_id: str) -> str:
+    """A case's state: its folder's, corrupt where the (reconciled) index found a DONE folder corrupt."""
+    folder = store.case_folder(case_id)
+    fs = st.folder_status(folder) if folder.exists() else "pending"
+    return "corrupt" if fs == "done" and indexed.get(case_id) == "corrupt" else fs
+
+
 def _select(planned: list[PlannedCase], store: st.CampaignStore, rerun_failed: bool):
+    """(to run, done, kept) after store.reconcile(): kept = failed, killed or corrupt without rerun_failed."""
+    indexed = store.statuses()
     run, done, failed = [], [], []
     for p in planned:
-        fs = st.folder_status(store.case_folder(p.case_id))
+        fs = _state(store, indexed, p.case_id)
         if fs == "done":
             done.append(p)
-        elif fs in st.FAILED_STATUSES and not rerun_failed:
+        elif fs in st.KEPT_STATUSES and not rerun_failed:
             failed.append(p)
         else:
             run.append(p)
@@ -82,7 +93,7 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
     for w in rate_warnings([p.case for p in planned]):
         print(f"warning: {w}", file=stream, flush=True)
     if dry_run:
-        return _dry_run(campaign, planned, executor, stream, report)
+        return _dry_run(campaign, planned, executor, stream, report, rerun_failed)
 
     store = st.CampaignStore(campaign.output, create=True)
     with store, store.lock("campaign run"):
@@ -92,11 +103,21 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         report.skipped_done, report.skipped_failed = len(done), len(failed)
         for p in done:
             report.statuses[p.case_id] = "done"
+        indexed = store.statuses()
         for p in failed:
-            report.statuses[p.case_id] = st.folder_status(store.case_folder(p.case_id))
+            report.statuses[p.case_id] = _state(store, indexed, p.case_id)
+        corrupt = sum(1 for p in failed if report.statuses[p.case_id] == "corrupt")
         print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
               f"{len(failed)} failed (kept; --rerun-failed reruns them), {len(todo)} to run "
               f"[{executor}] → {campaign.output}", file=stream, flush=True)
+        if corrupt:
+            print(f"campaign {campaign.name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
+                  "status`); --rerun-failed reruns them", file=stream, flush=True)
+        for p in todo:
+            if indexed.get(p.case_id) == "corrupt" and _state(store, indexed, p.case_id) == "corrupt":
+                row = store.row(p.case_id) or {}
+                print(f"rerun corrupt {p.case_id} ({p.label}): {row.get('message')}", file=stream, flush=True)
+                st.discard_corrupt(store.case_folder(p.case_id), row.get("cause"), row.get("message"))
         if not todo:
             return report
         tasks = [Task(p.case, p.engine, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
@@ -143,17 +164,32 @@ def _sigterm(signum, frame):
     raise Interrupted("SIGTERM")
 
 
-def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport) -> RunReport:
-    """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs)."""
+def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport,
+             rerun_failed: bool = False) -> RunReport:
+    """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs).
+    Finished folders are verified (through the index, as `campaign status` does): a corrupt one is
+    listed as kept, or as rerun with `rerun_failed`."""
     from interphase.engines.base import get_engine
 
     root = campaign.output / ".dry-run"
     engines = {}
+    indexed: dict = {}
+    if campaign.output.is_dir():
+        with st.CampaignStore(campaign.output) as store:
+            store.reconcile()
+            indexed = store.statuses()
     print(f"campaign {campaign.name} (dry run, {executor}): {len(planned)} cases → {campaign.output}", file=stream)
     for p in planned:
         folder = campaign.output / p.case_id
         state = st.folder_status(folder) if folder.exists() else "pending"
-        action = "skip (done)" if state == "done" else ("skip (failed)" if state in st.FAILED_STATUSES else "run")
+        if state == "done" and indexed.get(p.case_id) == "corrupt":
+            state = "corrupt"
+        if state == "done":
+            action = "skip (done)"
+        elif state in st.KEPT_STATUSES:
+            action = f"rerun ({state})" if rerun_failed else f"skip ({state})"
+        else:
+            action = "run"
         eng = engines.setdefault(p.engine, get_engine(p.engine))
         files = eng.write_input(p.case, root / p.case_id)
         limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)

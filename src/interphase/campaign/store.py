@@ -12,7 +12,15 @@ Folder of one case (`<output>/<case_id>/`), the truth:
 
 The index (`<output>/index.sqlite`) is a cache of the folders for fast status and reports: case id,
 engine, group, label, status, cause, timings, parameters and summary. It is rebuilt from the folders
-when missing, and re-read from the folders for any case whose folder changed state.
+when missing or unreadable, and re-read from the folders for any case whose folder changed state or
+that it does not know.
+
+Finished folders are verified when read (`verify_folder`): case.json must hash to the folder's name
+(interphase.case.case_id of its inputs, engine and recipe id) and every Parquet table must read
+(its footer: pyarrow.parquet.read_metadata). A folder that fails is `corrupt` (cause, and a message
+naming the path, what is wrong and the fix), never counted as done. The verdict is cached in the
+index with the sizes and mtimes of the files it read (`folder_fingerprint`): a folder is verified
+again only when one of them changed.
 """
 
 from __future__ import annotations
@@ -38,12 +46,24 @@ LOCK = ".campaign.lock"
 
 #: statuses: pending (never started), queued/running (this run), done, failed (engine or analysis
 #: error), killed (by SLURM: timeout, cancel, node failure), interrupted (Ctrl-C, SIGTERM, preempted),
-#: incomplete (a folder that started and never finished: its run was killed hard)
-STATUSES = ("pending", "queued", "running", "done", "failed", "killed", "interrupted", "incomplete")
+#: incomplete (a folder that started and never finished: its run was killed hard), corrupt (DONE, but
+#: the folder does not verify: case.json does not hash to its name, or a table does not read)
+STATUSES = ("pending", "queued", "running", "done", "failed", "killed", "interrupted", "incomplete", "corrupt")
 FAILED_STATUSES = ("failed", "killed")
+#: kept as they are by `campaign run`; rerun with --rerun-failed
+KEPT_STATUSES = FAILED_STATUSES + ("corrupt",)
+
+#: the tables a finished folder holds (the runner writes them when the engine gave them); the first
+#: two always
+TABLES = ("contacts", "history", "particles", "series")
+REQUIRED_TABLES = ("contacts", "history")
+#: causes of a corrupt folder; "unverifiable" (a done folder of the older id scheme) is not one
+CORRUPT_CAUSES = ("bad_case_json", "id_mismatch", "missing_table", "bad_parquet", "bad_summary")
+UNVERIFIABLE = "unverifiable"
 
 _COLUMNS = ("case_id", "engine", "grp", "label", "role", "pair_id", "status", "cause", "message", "started",
-            "finished", "elapsed", "attempts", "host", "slurm_job", "params", "summary", "updated")
+            "finished", "elapsed", "attempts", "host", "slurm_job", "params", "summary", "updated", "checked")
+_HIDDEN = ["params", "summary", "checked"]
 
 
 # ---- folder helpers (used by the runner, in worker processes) -------------------------------
@@ -113,26 +133,123 @@ def folder_status(folder: Path) -> str:
     return "pending"
 
 
-def folder_record(folder: Path) -> dict | None:
-    """An index row from a case folder alone (None if the folder holds no case.json)."""
+class _StoredInputs:
+    """A case as its case.json stores it (Case.canonical(), through JSON): what case_id hashes."""
+
+    def __init__(self, inputs: dict):
+        self._inputs = inputs
+
+    def canonical(self) -> dict:
+        return self._inputs
+
+
+_RERUN = "`campaign run FILE.toml --rerun-failed` reruns the case (its folder is cleaned first)"
+
+
+def folder_fingerprint(folder: Path) -> str:
+    """Sizes and mtimes of the files `verify_folder` reads: a cached verdict holds while this does."""
+    parts = []
+    for name in (DONE, CASE_JSON, SUMMARY_JSON, *(f"{t}.parquet" for t in TABLES)):
+        try:
+            s = os.stat(Path(folder) / name)
+            parts.append(f"{name}:{s.st_size}:{s.st_mtime_ns}")
+        except OSError:
+            parts.append(f"{name}:-")
+    return "|".join(parts)
+
+
+def verify_folder(folder: Path, meta: dict | None = None) -> tuple[str | None, str | None]:
+    """What is wrong with a finished folder: (cause, message naming the path, what and the fix), or
+    (None, None) when it checks out. Checks: case.json reads and its inputs, engine and recipe id
+    hash to the folder's name (interphase.case.case_id); contacts/history.parquet exist and every
+    table's Parquet footer reads (pyarrow.parquet.read_metadata: no data read); summary.json reads.
+    A folder of the older id scheme (engine version + template hash, no recipe id) cannot be hashed:
+    (UNVERIFIABLE, why) when its files check out — not a corruption."""
+    import pyarrow.parquet as pq
+
+    from interphase.case import case_id
+
     folder = Path(folder)
+    if meta is None:
+        meta = read_json(folder / CASE_JSON)
+    cj = folder / CASE_JSON
+    if not isinstance(meta, dict):
+        return "bad_case_json", f"{cj}: does not read as a JSON object; fix: {_RERUN}"
+    prov = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
+    rid = prov.get("recipe_id") or meta.get("recipe_id")
+    inputs, engine = meta.get("inputs"), meta.get("engine")
+    note = None
+    if rid:
+        if not isinstance(inputs, dict) or not isinstance(engine, str):
+            return "bad_case_json", f"{cj}: no 'inputs' table or 'engine' name; fix: {_RERUN}"
+        try:
+            expect = case_id(_StoredInputs(inputs), engine, str(rid))
+        except (TypeError, ValueError) as exc:
+            return "bad_case_json", f"{cj}: its inputs do not hash ({exc}); fix: {_RERUN}"
+        if expect != folder.name:
+            return "id_mismatch", (f"{cj}: its inputs, engine {engine!r} and recipe {rid} hash to {expect}, not to "
+                                   f"the folder's name {folder.name} (case.json edited, or the folder renamed or "
+                                   f"copied over); fix: {_RERUN}, or restore that folder's case.json")
+    elif any(k in prov or k in meta for k in ("template_hash", "engine_version")):
+        note = (f"{cj}: id of the older scheme (engine version + template hash, no recipe id): its inputs cannot be "
+                "checked against the folder's name; its tables were checked")
+    else:
+        return "bad_case_json", f"{cj}: no recipe id (provenance.recipe_id) to check the folder's name with; fix: {_RERUN}"
+    for table in TABLES:
+        path = folder / f"{table}.parquet"
+        if not path.exists():
+            if table in REQUIRED_TABLES:
+                return "missing_table", f"{path}: missing from a finished folder; fix: {_RERUN}"
+            continue
+        try:
+            pq.read_metadata(path)
+        except Exception as exc:  # noqa: BLE001 — pyarrow raises ArrowInvalid, OSError, ...
+            why = str(exc).split("\n", 1)[0][:160]
+            return "bad_parquet", f"{path}: does not read as Parquet ({type(exc).__name__}: {why}); fix: {_RERUN}"
+    summ = read_json(folder / SUMMARY_JSON)
+    if not isinstance(summ, dict):
+        return "bad_summary", f"{folder / SUMMARY_JSON}: missing or not a JSON object; fix: {_RERUN}"
+    return (UNVERIFIABLE, note) if note else (None, None)
+
+
+def discard_corrupt(folder: Path, cause: str | None = None, message: str | None = None) -> None:
+    """Before a corrupt case is rerun: record why in attempts.jsonl and remove DONE, so that the
+    runner treats the folder as unfinished and cleans it (attempts.jsonl kept)."""
+    folder = Path(folder)
+    append_attempt(folder, {"event": "discarded", "status": "corrupt", "cause": cause, "message": message,
+                            "time": time.time()})
+    with contextlib.suppress(FileNotFoundError):
+        (folder / DONE).unlink()
+
+
+def folder_record(folder: Path) -> dict | None:
+    """An index row from a case folder alone (None if the folder holds no case.json). A finished
+    folder is verified (`verify_folder`): status corrupt when it fails; `checked` is the fingerprint
+    of the files the verdict was made from."""
+    folder = Path(folder)
+    checked = folder_fingerprint(folder)
     meta = read_json(folder / CASE_JSON)
     if meta is None:
         return None
     status = folder_status(folder)
-    row = {"case_id": meta.get("case_id", folder.name), "engine": meta.get("engine"), "grp": meta.get("group"),
+    row = {"case_id": folder.name, "engine": meta.get("engine"), "grp": meta.get("group"),
            "label": meta.get("label"), "role": meta.get("role"), "pair_id": meta.get("pair_id"),
            "status": status, "cause": None, "message": None, "started": meta.get("started"),
            "finished": meta.get("finished"), "elapsed": meta.get("elapsed"), "host": meta.get("host"),
            "slurm_job": meta.get("slurm_job"), "params": json.dumps(meta.get("params", {}), sort_keys=True),
-           "summary": None, "updated": time.time()}
+           "summary": None, "updated": time.time(), "checked": None}
     try:
         row["attempts"] = sum(1 for line in open(folder / ATTEMPTS) if '"event": "start"' in line)
     except OSError:
         row["attempts"] = 0
     if status == "done":
-        summ = read_json(folder / SUMMARY_JSON)
-        row["summary"] = json.dumps(summ.get("row", summ) if isinstance(summ, dict) else {}, sort_keys=True)
+        cause, message = verify_folder(folder, meta)
+        row["checked"], row["cause"], row["message"] = checked, cause, message
+        if cause in CORRUPT_CAUSES:
+            row["status"] = "corrupt"
+        else:
+            summ = read_json(folder / SUMMARY_JSON)
+            row["summary"] = json.dumps(summ.get("row", summ) if isinstance(summ, dict) else {}, sort_keys=True)
     elif status in ("failed", "killed", "interrupted"):
         fail = read_json(folder / FAILURE_JSON) or {}
         row["cause"], row["message"] = fail.get("cause"), fail.get("message")
@@ -157,14 +274,33 @@ class CampaignStore:
                              fix="run `campaign run FILE.toml` first, or check [campaign].output")
         self.index_path = self.root / INDEX
         fresh = not self.index_path.exists()
+        try:
+            self._open()
+        except sqlite3.DatabaseError:
+            # not a database (truncated, overwritten): keep it aside and rebuild from the folders
+            with contextlib.suppress(Exception):
+                self._db.close()
+            os.replace(self.index_path, self.index_path.with_name(f"{INDEX}.broken-{int(time.time())}"))
+            for ext in ("-wal", "-shm"):
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(str(self.index_path) + ext)
+            self._open()
+            fresh = True
+        if fresh:
+            self.rebuild()
+
+    def _open(self) -> None:
         self._db = sqlite3.connect(self.index_path, timeout=60, isolation_level=None)
         self._db.execute("PRAGMA journal_mode=WAL")   # readers do not block the running campaign
         self._db.execute(
             "CREATE TABLE IF NOT EXISTS cases (case_id TEXT PRIMARY KEY, engine TEXT, grp TEXT, label TEXT, "
             "role TEXT, pair_id TEXT, status TEXT, cause TEXT, message TEXT, started REAL, finished REAL, "
-            "elapsed REAL, attempts INTEGER, host TEXT, slurm_job TEXT, params TEXT, summary TEXT, updated REAL)")
-        if fresh:
-            self.rebuild()
+            "elapsed REAL, attempts INTEGER, host TEXT, slurm_job TEXT, params TEXT, summary TEXT, updated REAL, "
+            "checked TEXT)")
+        have = {r[1] for r in self._db.execute("PRAGMA table_info(cases)")}
+        if "checked" not in have:   # an index written before folders were verified
+            with contextlib.suppress(sqlite3.OperationalError):   # another reader added it first
+                self._db.execute("ALTER TABLE cases ADD COLUMN checked TEXT")
 
     def close(self) -> None:
         self._db.close()
@@ -229,8 +365,10 @@ class CampaignStore:
         for p in planned:
             folder = self.root / p.case_id
             status = folder_status(folder) if folder.exists() else "pending"
-            if p.case_id in have and have[p.case_id][0] == status and (status != "done" or have[p.case_id][1]):
-                continue
+            known = have.get(p.case_id)
+            if known and (known[0] == status or (status == "done" and known[0] == "corrupt")) \
+                    and (known[0] != "done" or known[1]):
+                continue   # a done folder's verdict is kept up to date by reconcile()
             rec = folder_record(folder) if status != "pending" else None
             if rec is None:
                 rec = {"case_id": p.case_id, "status": status, "attempts": 0, "updated": now}
@@ -239,22 +377,32 @@ class CampaignStore:
             rows.append(rec)
         self._upsert(rows)
 
-    def reconcile(self, case_ids=None, stale_running: bool = False) -> None:
-        """Re-read every case whose folder state differs from its index row (e.g. after a crash).
+    def reconcile(self, case_ids=None, stale_running: bool = False) -> int:
+        """Re-read every case whose folder disagrees with its index row (e.g. after a crash, or a file
+        changed by hand): a folder state other than the row's, a finished folder whose files changed
+        since it was verified (or never verified), a case folder the index does not know (all cases
+        only). Returns the rows rewritten.
 
         Rows marked queued/running are left alone (a run may be at work) unless `stale_running`:
         the caller holds the campaign lock, so nothing can be running."""
-        rows = list(self._db.execute("SELECT case_id, status FROM cases"))
+        rows = list(self._db.execute("SELECT case_id, status, checked FROM cases"))
         wanted = set(case_ids) if case_ids is not None else None
         fix = []
-        for cid, status in rows:
+        if wanted is None:
+            known = {r[0] for r in rows}
+            fix = [r for r in (folder_record(self.root / cid) for cid in self.folder_ids() if cid not in known) if r]
+        for cid, status, checked in rows:
             if wanted is not None and cid not in wanted:
                 continue
             folder = self.root / cid
             fs = folder_status(folder) if folder.exists() else "pending"
             if not stale_running and status in ("queued", "running") and fs in ("pending", "incomplete"):
                 continue
-            if fs != status:
+            if fs == "done":
+                stale = status not in ("done", "corrupt") or checked != folder_fingerprint(folder)
+            else:
+                stale = fs != status
+            if stale:
                 rec = folder_record(folder)
                 if rec is None:
                     self.set_status(cid, "pending")
@@ -264,6 +412,11 @@ class CampaignStore:
                                 if old.get(k) is not None})
                     fix.append(rec)
         self._upsert(fix)
+        return len(fix)
+
+    def statuses(self) -> dict[str, str]:
+        """{case id: status} as the index has it (call reconcile() first for the folders' word)."""
+        return dict(self._db.execute("SELECT case_id, status FROM cases").fetchall())
 
     def row(self, case_id: str) -> dict | None:
         cur = self._db.execute(f"SELECT {', '.join(_COLUMNS)} FROM cases WHERE case_id = ?", (case_id,))
@@ -298,7 +451,7 @@ class CampaignStore:
     def status(self) -> pd.DataFrame:
         """One row per indexed case: id, engine, group, label, role, status, cause, message, timings."""
         self.reconcile()
-        return self._frame().drop(columns=["params", "summary"])
+        return self._frame().drop(columns=_HIDDEN)
 
     def summaries(self) -> pd.DataFrame:
         """One row per FINISHED case: ids, group, label, status, flat Case parameters, summary fields,
@@ -306,10 +459,10 @@ class CampaignStore:
         self.reconcile()
         df = self._frame("WHERE status = 'done'")
         if df.empty:
-            return df.drop(columns=["params", "summary"])
+            return df.drop(columns=_HIDDEN)
         params = pd.DataFrame([json.loads(p or "{}") for p in df["params"]], index=df.index)
         summ = pd.DataFrame([json.loads(s or "{}") for s in df["summary"]], index=df.index)
-        base = df.drop(columns=["params", "summary", "message"])
+        base = df.drop(columns=[*_HIDDEN, "message"])
         summ = summ[[c for c in summ.columns if c not in base.columns and c not in params.columns]]
         return pd.concat([base, params, summ], axis=1)
 
