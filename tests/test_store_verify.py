@@ -56,8 +56,9 @@ def test_truncated_table_is_corrupt_unused_and_rerun(runs, capsys):
     # the CLI: counted and listed as corrupt, the message (path, fix) in --json
     assert main(["status", str(toml), "--output", str(out)]) == 0
     text = capsys.readouterr().out
-    (line,) = [ln for ln in text.splitlines() if ln.startswith(cid[:8])]
-    assert "1 corrupt" in text and "corrupt" in line    # the cause column is cut at 80 columns here
+    line, why = [ln for ln in text.splitlines() if ln.startswith(cid[:8])]   # its table row, then its message
+    assert "1 corrupt" in text and "corrupt" in line
+    assert why.startswith(f"{cid[:8]} corrupt:") and "contacts.parquet" in text and "--rerun-failed" in text
     assert main(["status", str(toml), "--output", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     (case,) = [c for c in data["cases"] if c["case_id"] == cid]

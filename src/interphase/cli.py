@@ -321,6 +321,11 @@ def _cmd_campaign_status(args) -> int:
         table.add_row(str(r.case_id)[:8], r.engine, r.label, r.status, r.cause if isinstance(r.cause, str) else "")
     console = Console()
     console.print(table, width=max(80, min(console.width, 120)), crop=True)
+    bad = df[df["status"].isin(("corrupt", "failed"))]
+    for r in bad.itertuples():       # what is wrong and the fix, under the table (wrapped, not cut)
+        if isinstance(r.message, str) and r.message:
+            console.print(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width=max(80, min(console.width, 120)),
+                          soft_wrap=False, highlight=False)
     return 0
 
 
