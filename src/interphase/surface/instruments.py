@@ -27,9 +27,11 @@ from pathlib import Path
 import numpy as np
 
 from interphase.errors import InputError
+from interphase.surface.spec import UNITS
 
-#: metres per unit for the unit names SurfaceTopography reports (and the project's options)
-UNIT_FACTORS = {"m": 1.0, "mm": 1e-3, "µm": 1e-6, "μm": 1e-6, "um": 1e-6, "nm": 1e-9, "Å": 1e-10, "pm": 1e-12}
+#: metres per unit: the project's option names (surface.spec.UNITS) and the other names
+#: SurfaceTopography reports
+UNIT_FACTORS = {**UNITS, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "Å": 1e-10, "pm": 1e-12}
 UNITS_FIX = "give the units of the file's x and z (--units um | mm | m, or units = \"...\" in the campaign)"
 _NUM = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
 _SPLIT = re.compile(r"[,;\t ]+")
