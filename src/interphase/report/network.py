@@ -243,7 +243,8 @@ def draw_network_on(ax, contacts: pd.DataFrame, snapshot, *, particles: pd.DataF
         art["walls"] = [ax.axvline(w * mm, color="0.2", lw=2.5, zorder=6, gid="walls") for w in (0.0, box_l)]
     art["max_width"], art["fmax"], art["shear_disp"] = max_width, fmax, shear
     if legend:
-        ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.85)
+        ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=len(handles), fontsize=7,
+                  frameon=False, borderaxespad=0.0)        # above the axes: never over the grains
     ax.set_xlabel("x [mm] (soil moves +x relative to the surface)")
     ax.set_ylabel("z [mm]")
     return art
@@ -268,7 +269,7 @@ def network_figure(contacts: pd.DataFrame, snapshot, *, particles=None, case=Non
     ax = fig.add_axes([0.07, 0.1, 0.9, 0.8])
     art = draw_network_on(ax, contacts, snapshot, particles=particles, case=case, profile=profile)
     ax.set_title(title or f"force network, snapshot {snapshot} (shear {art['shear_disp'] * 1e3:.2f} mm), "
-                 f"max |fn| = {art['fmax']:.3g} N", fontsize=9)
+                 f"max |fn| = {art['fmax']:.3g} N", fontsize=9, pad=16)     # the legend sits between
     return fig, art
 
 
