@@ -191,3 +191,14 @@ def test_cli_animate_unknown_label_exits_2_with_a_message(quick_campaign, tmp_pa
     assert code == 2
     assert "no finished run with label or case id 'interface-nosuch-s9'" in err and "Traceback" not in err
     assert not (tmp_path / "r" / "figures").exists()
+
+
+def test_a_long_animation_is_capped_evenly(peak_run, tmp_path):
+    from PIL import Image
+
+    from interphase.report.network import animate_case
+
+    _, folder, _, case = peak_run
+    gif = animate_case(folder, tmp_path / "a.gif", case=case, max_frames=3)
+    with Image.open(gif) as im:
+        assert im.n_frames == 3
