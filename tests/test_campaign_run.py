@@ -160,6 +160,24 @@ def test_ctrl_c_stops_cleanly_and_records_interrupted(campaign):
     _no_engine_left(out)
 
 
+def test_sigterm_to_the_campaign_alone_starts_no_case_after_it(campaign):
+    # `kill PID` of the campaign (not its group): the pool has already handed a worker its next
+    # task, which starts after the interruption; it must be stopped too, not run on unwatched
+    out = campaign.parent / "out"
+    proc = _start(campaign, "--jobs", "1")
+    _wait_for(lambda: any(stale_engine_pids(f) for f in _folders(out)), 120, "a running engine")
+    done_before = sum((f / "DONE").exists() for f in _folders(out))
+    proc.send_signal(signal.SIGTERM)
+    text, _ = proc.communicate(timeout=120)
+    assert proc.returncode != 0 and "interrupted" in text, text
+    time.sleep(3)                                     # a late starter would have an engine up by now
+    _no_engine_left(out)
+    # nothing ran to its end after the signal: the running case and the queued one are interrupted
+    assert sum((f / "DONE").exists() for f in _folders(out)) == done_before, text
+    assert all(folder_status(f) in ("done", "interrupted") for f in _folders(out)), text
+    assert not any((f / "DONE").exists() for f in _folders(out) if folder_status(f) == "interrupted")
+
+
 def test_second_run_is_refused_while_the_first_holds_the_lock(campaign, capsys):
     out = campaign.parent / "out"
     with CampaignStore(out, create=True) as store, store.lock():

@@ -83,10 +83,11 @@ def _raise_interrupted(signum, frame):
 
 
 def _local_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
-    _EVENTS.put(("started", meta["case_id"], {"pid": os.getpid()}))
+    # handlers before the "started" event: the parent signals a worker once it has heard it start
     signal.signal(signal.SIGINT, _raise_interrupted)
     signal.signal(signal.SIGTERM, _raise_interrupted)
     try:
+        _EVENTS.put(("started", meta["case_id"], {"pid": os.getpid()}))
         return run_case(case, engine, folder, meta)
     except (Interrupted, KeyboardInterrupt, SystemExit) as exc:
         return interrupted_result(meta["case_id"], f"stopped: {getattr(exc, 'reason', type(exc).__name__)}")
@@ -144,17 +145,26 @@ class LocalExecutor:
             except (KeyboardInterrupt, Interrupted):
                 for fut in pending:
                     fut.cancel()
-                drain()
-                for cid, pid in list(workers.items()):
-                    try:
-                        os.kill(pid, signal.SIGINT)
-                    except (ProcessLookupError, TypeError):
-                        pass
+                signalled: set[str] = set()
+
+                def stop_started():
+                    # the pool hands a worker its next task before the parent can cancel it (a
+                    # queued call), so a case may start after the interruption: stop it as well
+                    drain()
+                    for cid, pid in list(workers.items()):
+                        if cid not in signalled:
+                            signalled.add(cid)
+                            try:
+                                os.kill(pid, signal.SIGINT)
+                            except (ProcessLookupError, TypeError):
+                                pass
+
+                stop_started()
                 running = {f for f in pending if not f.cancelled()}
                 deadline = time.monotonic() + grace
                 while running and time.monotonic() < deadline:
                     done, running = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
-                    drain()
+                    stop_started()
                     for fut in done:
                         finish(fut)
                 for fut in running:   # did not stop within the grace period
