@@ -1,12 +1,13 @@
-"""RECIPE_VERSION keeps case ids honest: what the engines are given for reference cases is pinned.
+"""RECIPE_VERSIONS keeps case ids honest: what each engine is given for reference cases is pinned.
 
-A case id hashes the Case, the engine and its recipe id (RECIPE_VERSION and the Recipe's values), not
-the code, so that a refactor keeps every finished case. The price: a change that alters what an
-engine is given (a template, the device, the packing, the rendering, the YADE driver's behaviour)
-must bump interphase.recipe.RECIPE_VERSION. This test renders reference cases of both engines and
-compares every file's hash (and the YADE driver's code, which runs inside YADE) with
-tests/data/recipe_renders.json, written for the current version. When it fails: if the change is
-meant, bump RECIPE_VERSION and run `python tests/test_recipe_version.py` to write the file again.
+A case id hashes the Case, the engine and its recipe id (the engine's number in RECIPE_VERSIONS and
+the Recipe's values), not the code, so that a refactor keeps every finished case. The price: a change
+that alters what an engine is given (a template, the device, the packing, the rendering, the YADE
+driver's behaviour) must bump that engine's number in interphase.recipe.RECIPE_VERSIONS. This test
+renders reference cases of both engines and compares every file's hash (and the YADE driver's code,
+which runs inside YADE) with tests/data/recipe_renders.json, written for the current numbers. When it
+fails: if the change is meant, bump the engine's number and run `python tests/test_recipe_version.py`
+to write the file again.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from interphase.engines.base import EngineProfile
 from interphase.engines.liggghts import Liggghts
 from interphase.engines.yade import Yade
 from interphase.material import Gradation
-from interphase.recipe import RECIPE_VERSION
+from interphase.recipe import RECIPE_VERSIONS
 from interphase.surface.spec import ProfileSpec
 
 GOLDEN = Path(__file__).parent / "data" / "recipe_renders.json"
@@ -65,7 +66,7 @@ def _code(path: Path) -> str:
 
 
 def renders() -> dict:
-    out = {"recipe_version": RECIPE_VERSION, "yade_driver": _code(DRIVER), "files": {}}
+    out = {"recipe_versions": dict(RECIPE_VERSIONS), "yade_driver": _code(DRIVER), "files": {}}
     for engine in (Liggghts(profile=EngineProfile("liggghts")), Yade(profile=EngineProfile("yade"))):
         for name, case in CASES.items():
             for rel, content in sorted(engine.render(case).items()):
@@ -76,15 +77,20 @@ def renders() -> dict:
 def test_rendered_inputs_change_only_with_the_recipe_version():
     pinned = json.loads(GOLDEN.read_text())
     now = renders()
-    changed = sorted(k for k in set(pinned["files"]) | set(now["files"]) if pinned["files"].get(k) != now["files"].get(k))
-    if pinned["yade_driver"] != now["yade_driver"]:
-        changed.append("src/interphase/engines/yade_driver.py (code)")
-    fix = ("bump interphase.recipe.RECIPE_VERSION (every case id changes: finished cases are rerun) and "
-           "run `python tests/test_recipe_version.py`")
-    if now["recipe_version"] == pinned["recipe_version"]:
-        assert not changed, f"what the engines are given changed at recipe version {RECIPE_VERSION}: {changed}; {fix}"
-    else:
-        assert False, f"RECIPE_VERSION is {RECIPE_VERSION}, the pinned renders are for {pinned['recipe_version']}: {fix}"
+    problems = []
+    for engine, version in RECIPE_VERSIONS.items():
+        changed = sorted(k for k in set(pinned["files"]) | set(now["files"])
+                         if k.startswith(f"{engine}/") and pinned["files"].get(k) != now["files"].get(k))
+        if engine == "yade" and pinned["yade_driver"] != now["yade_driver"]:
+            changed.append("src/interphase/engines/yade_driver.py (code)")
+        fix = (f"bump RECIPE_VERSIONS[{engine!r}] in interphase/recipe.py (every {engine} case id changes: its "
+               "finished cases become stale) and run `python tests/test_recipe_version.py`")
+        if pinned["recipe_versions"].get(engine) != version:
+            problems.append(f"RECIPE_VERSIONS[{engine!r}] is {version}, the pinned renders are for "
+                            f"{pinned['recipe_versions'].get(engine)}: run `python tests/test_recipe_version.py`")
+        elif changed:
+            problems.append(f"what {engine} is given changed at its recipe version {version}: {changed}; {fix}")
+    assert not problems, "\n".join(problems)
 
 
 def test_renders_do_not_depend_on_the_machine(tmp_path, monkeypatch):
@@ -95,4 +101,4 @@ def test_renders_do_not_depend_on_the_machine(tmp_path, monkeypatch):
 
 if __name__ == "__main__":
     GOLDEN.write_text(json.dumps(renders(), indent=1, sort_keys=True) + "\n")
-    print(f"wrote {GOLDEN} for recipe version {RECIPE_VERSION}", file=sys.stderr)
+    print(f"wrote {GOLDEN} for recipe versions {RECIPE_VERSIONS}", file=sys.stderr)

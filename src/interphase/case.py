@@ -216,7 +216,7 @@ def canonical_json(obj) -> str:
 
 def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
     """Short hash of the case's canonical inputs, the engine that runs it and the engine's recipe
-    (Engine.recipe_id: its name, RECIPE_VERSION and the Recipe's values). Probed nowhere: the same
+    (Engine.recipe_id: its name, its RECIPE_VERSIONS number and the Recipe's values). Probed nowhere: the same
     on a machine without any engine."""
     payload = canonical_json({"case": case.canonical(), "engine": engine, "recipe": recipe_id})
     return hashlib.sha256(payload.encode()).hexdigest()[:length]

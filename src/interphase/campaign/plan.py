@@ -1,8 +1,8 @@
 """Plan: the campaign's cases × engines → `PlannedCase`s with stable ids, folders and flat parameters.
 
 A case id is `interphase.case.case_id(case, engine, recipe id)`: the same inputs run by the same
-engine and recipe (interphase.recipe.RECIPE_VERSION and the Recipe's values) get the same id on
-every machine, with or without the engine installed; a new recipe version gives new ids (and so new
+engine and recipe (the engine's number in interphase.recipe.RECIPE_VERSIONS and the Recipe's values) get the same id on
+every machine, with or without the engine installed; a new recipe version gives that engine new ids (and so new
 folders: old results are never overwritten). The engine build that ran a case is provenance in its
 case.json.
 """

@@ -126,13 +126,14 @@ class Engine(abc.ABC):
 
     def recipe_id(self) -> str:
         """Short SHA-256 of what decides this engine's case folders besides the Case: the engine's
-        name, interphase.recipe.RECIPE_VERSION and the Recipe's values. Code and templates are not
-        hashed (a refactor that writes the same inputs keeps every finished case); a change that
-        alters what an engine is given must bump RECIPE_VERSION, which tests/test_recipe_version.py
-        enforces. The engine binary's version is provenance (case.json), not identity."""
-        from interphase.recipe import RECIPE_VERSION
+        name, its number in interphase.recipe.RECIPE_VERSIONS and the Recipe's values. Code and
+        templates are not hashed (a refactor that writes the same inputs keeps every finished case); a
+        change that alters what an engine is given must bump its number, which
+        tests/test_recipe_version.py enforces. The engine binary's version is provenance (case.json),
+        not identity."""
+        from interphase.recipe import RECIPE_VERSIONS
 
-        payload = {"engine": self.name, "version": RECIPE_VERSION, "recipe": self.recipe.to_dict()}
+        payload = {"engine": self.name, "version": RECIPE_VERSIONS[self.name], "recipe": self.recipe.to_dict()}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     # -- the contract
