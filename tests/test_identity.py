@@ -65,10 +65,10 @@ def test_report_reads_runs_written_elsewhere(quick_campaign, tmp_path, monkeypat
     assert main(["report", str(mine), "--out", str(tmp_path / "rep2")]) == 2
 
 
-def test_a_case_run_again_under_a_new_recipe_is_counted_once(tmp_path):
+def test_the_report_uses_one_recipe_per_engine_and_counts_what_it_left_out(tmp_path):
     from interphase.campaign.plan import plan
     from interphase.campaign.schema import load_campaign
-    from interphase.report.build import one_run_per_case
+    from interphase.report.build import one_run_per_case, recipe_notes
 
     f = tmp_path / "c.toml"
     f.write_text('[campaign]\nname = "c"\nengines = ["liggghts"]\n[case]\ntest = "interface"\n'
@@ -77,11 +77,20 @@ def test_a_case_run_again_under_a_new_recipe_is_counted_once(tmp_path):
     a, b = plan(c, identity=lambda name: "new-recipe")
     old_a = next(iter(plan(c, identity=lambda name: "old-recipe")))
     rows = pd.DataFrame([
-        dict(case_id=a.case_id, label=a.label, engine="liggghts", finished=1.0, peak_stress_ratio=0.30),
-        dict(case_id=old_a.case_id, label=a.label, engine="liggghts", finished=2.0, peak_stress_ratio=0.31),
-        dict(case_id="0ld0b", label=b.label, engine="liggghts", finished=3.0, peak_stress_ratio=0.32),  # no new run yet
-        dict(case_id="gone", label="a-label-no-longer-asked-for", engine="liggghts", finished=4.0, peak_stress_ratio=0.9),
+        dict(case_id=a.case_id, label=a.label, engine="liggghts", finished=1.0, recipe_id="new-recipe"),
+        dict(case_id=old_a.case_id, label=a.label, engine="liggghts", finished=2.0, recipe_id="old-recipe"),
+        dict(case_id="0ld0b", label=b.label, engine="liggghts", finished=3.0, recipe_id="old-recipe"),  # no new run yet
+        dict(case_id="gone", label="a-label-no-longer-asked-for", engine="liggghts", finished=4.0, recipe_id="new-recipe"),
     ])
     out = one_run_per_case(rows, c, identity=lambda name: "new-recipe")
-    assert sorted(out["case_id"]) == sorted([a.case_id, "0ld0b"])        # this recipe's run first
-    assert out.attrs == {"left_out": 2, "earlier_recipe": 1}
+    assert list(out["case_id"]) == [a.case_id]                       # this recipe's runs only: never mixed
+    assert out.attrs == {"recipes": {"liggghts": "new-recipe"}, "current": {"liggghts": True}, "other_recipe": 2,
+                         "not_asked": 1}
+    assert any("2 finished run(s) of another recipe left out" in n for n in recipe_notes(out.attrs))
+
+    # nothing of this recipe yet: the recipe with most runs, said
+    out = one_run_per_case(rows.iloc[1:], c, identity=lambda name: "newer-recipe")
+    assert sorted(out["case_id"]) == sorted([old_a.case_id, "0ld0b"])
+    assert out.attrs["recipes"] == {"liggghts": "old-recipe"} and out.attrs["current"] == {"liggghts": False}
+    assert any("no finished run of this version's recipe; the report uses recipe old-recipe" in n
+               for n in recipe_notes(out.attrs))

@@ -274,6 +274,8 @@ def _add_campaign(sub) -> None:
     p.add_argument("--jobs", type=int, default=None, help="local: cases at a time (default: the file's, else one per core); "
                    "slurm: array tasks at a time")
     p.add_argument("--rerun-failed", action="store_true", help="run failed and SLURM-killed cases again")
+    p.add_argument("--rerun-stale", action="store_true",
+                   help="run again the cases finished under another recipe or engine build (see `campaign status`)")
     p.add_argument("--dry-run", action="store_true", help="list what would run and render the decks; run nothing")
     p.add_argument("--output", default=None, help="output folder (default: the file's [campaign].output, else runs/NAME)")
     p.add_argument("--plain", action="store_true", help="plain progress lines even on a terminal")
@@ -291,7 +293,8 @@ def _cmd_campaign_run(args) -> int:
     from interphase.campaign.run import run_campaign
 
     report = run_campaign(args.campaign, engine=args.engine, executor=args.executor, jobs=args.jobs,
-                          rerun_failed=args.rerun_failed, dry_run=args.dry_run, output=args.output,
+                          rerun_failed=args.rerun_failed, rerun_stale=args.rerun_stale, dry_run=args.dry_run,
+                          output=args.output,
                           live=False if args.plain else None)
     return 0 if args.dry_run else report.exit_code
 
@@ -310,8 +313,10 @@ def _cmd_campaign_status(args) -> int:
 
     # one line per case in 80 columns: short ids, labels cut at the end (full ids, labels and
     # messages in --json)
+    console = Console()
+    width = max(80, min(console.width, 120))
     table = Table(title=f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())),
-                  box=None, pad_edge=False, title_justify="left")
+                  box=None, pad_edge=False, title_justify="left", width=width)
     table.add_column("id", no_wrap=True, min_width=8)
     table.add_column("engine", no_wrap=True, min_width=8)
     table.add_column("label", no_wrap=True, overflow="ellipsis", ratio=1)
@@ -319,13 +324,16 @@ def _cmd_campaign_status(args) -> int:
     table.add_column("cause", no_wrap=True, overflow="ellipsis", max_width=14)
     for r in df.itertuples():
         table.add_row(str(r.case_id)[:8], r.engine, r.label, r.status, r.cause if isinstance(r.cause, str) else "")
-    console = Console()
-    console.print(table, width=max(80, min(console.width, 120)), crop=True)
+    console.print(table, width=width, crop=True)
     bad = df[df["status"].isin(("corrupt", "failed"))]
     for r in bad.itertuples():       # what is wrong and the fix, under the table (wrapped, not cut)
         if isinstance(r.message, str) and r.message:
-            console.print(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width=max(80, min(console.width, 120)),
+            console.print(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width=width,
                           soft_wrap=False, highlight=False)
+    stale = df[df["status"] == "stale"]
+    for kind, rows in stale.groupby("cause"):   # one line per kind: a recipe change makes every case stale
+        console.print(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
+                      width=width, soft_wrap=False, highlight=False)
     return 0
 
 

@@ -7,6 +7,13 @@ message. Finished cases (DONE) are never rerun; failed and SLURM-killed ones onl
 `rerun_failed`, and so are corrupt ones (DONE, but the folder does not verify: store.verify_folder;
 their DONE is removed first so that the runner cleans the folder); interrupted and incomplete ones
 always (they never finished).
+
+A case is *stale* (`find_stale`) when its finished result is not of the current recipe or engine
+build: (recipe) no folder of this recipe's id, but a finished one of the same label and engine under
+another recipe (a recipe change gives new ids); (engine build) finished, but by another build of the
+engine than this machine's, when this machine's can be told. Stale cases are kept as they are and
+listed; `rerun_stale` runs them: under this recipe in a new folder (the old one stays), or, for an
+engine build, again in the same folder after the old one is moved to `<output>/.superseded/`.
 """
 
 from __future__ import annotations
@@ -56,19 +63,79 @@ def _state(store: st.CampaignStore, indexed: dict, case_id: str) -> str:
     return "corrupt" if fs == "done" and indexed.get(case_id) == "corrupt" else fs
 
 
-def _select(planned: list[PlannedCase], store: st.CampaignStore, rerun_failed: bool):
-    """(to run, done, kept) after store.reconcile(): kept = failed, killed or corrupt without rerun_failed."""
+@dataclass(frozen=True)
+class Stale:
+    """Why a planned case's finished result is not current: kind 'recipe' or 'engine build'."""
+
+    kind: str
+    message: str
+    run_id: str            # the folder of the finished run it refers to
+
+
+def engine_builds(names) -> dict[str, str | None]:
+    """{engine: the build this machine runs}; None where it cannot be told (not installed, banner
+    unreadable): nothing is judged stale against it, so a laptop without engines flags nothing."""
+    from interphase.engines.base import get_engine
+
+    out = {}
+    for n in dict.fromkeys(names):
+        v = get_engine(n).version()
+        out[n] = None if v in ("not-installed", "unknown") else v
+    return out
+
+
+def find_stale(planned: list[PlannedCase], rows, builds: dict) -> dict[str, Stale]:
+    """{case id: Stale} of the planned cases whose finished result is of another recipe or engine
+    build. `rows`: the index (CampaignStore.status(), every folder); `builds`: engine_builds()."""
+    ids = {p.case_id for p in planned}
+    done = rows[rows["status"] == "done"]
+    earlier = {}
+    for r in done[~done["case_id"].isin(ids)].sort_values("finished", na_position="first").itertuples():
+        earlier[(r.label, r.engine)] = r           # the latest finished run of another recipe
+    by_id = {r.case_id: r for r in rows.itertuples()}
+    out = {}
+    for p in planned:
+        row = by_id.get(p.case_id)
+        status = row.status if row is not None else "pending"
+        old = earlier.get((p.label, p.engine))
+        if status == "pending" and old is not None:
+            out[p.case_id] = Stale("recipe", f"finished under recipe {old.recipe_id} (folder {old.case_id}), not "
+                                   f"this version's {p.recipe_id}: kept; `campaign run --rerun-stale` runs it under "
+                                   "this recipe", old.case_id)
+        elif status == "done" and builds.get(p.engine) and isinstance(row.engine_version, str) \
+                and row.engine_version != builds[p.engine]:
+            out[p.case_id] = Stale("engine build", f"run by {row.engine_version}; this machine has "
+                                   f"{builds[p.engine]}: `campaign run --rerun-stale` runs it again (the old folder "
+                                   "is kept in .superseded/)", p.case_id)
+    return out
+
+
+def _select(planned: list[PlannedCase], store: st.CampaignStore, rerun_failed: bool, stale: dict,
+            rerun_stale: bool):
+    """(to run, done, kept, stale kept) after store.reconcile(): kept = failed, killed or corrupt
+    without rerun_failed; stale kept = stale cases without rerun_stale."""
     indexed = store.statuses()
-    run, done, failed = [], [], []
+    run, done, failed, kept_stale = [], [], [], []
     for p in planned:
         fs = _state(store, indexed, p.case_id)
-        if fs == "done":
+        if p.case_id in stale:
+            (run if rerun_stale else kept_stale).append(p)
+        elif fs == "done":
             done.append(p)
         elif fs in st.KEPT_STATUSES and not rerun_failed:
             failed.append(p)
         else:
             run.append(p)
-    return run, done, failed
+    return run, done, failed, kept_stale
+
+
+def _supersede(store: st.CampaignStore, case_id: str) -> Path:
+    """Move a finished folder out of the campaign (to .superseded/<id>-<time>/) before it is run again."""
+    dest = store.root / ".superseded" / f"{case_id}-{int(time.time())}"
+    dest.parent.mkdir(exist_ok=True)
+    os.replace(store.case_folder(case_id), dest)
+    store.set_status(case_id, "pending")
+    return dest
 
 
 def _slots(campaign: Campaign, executor: str, jobs: int | None) -> int:
@@ -79,8 +146,8 @@ def _slots(campaign: Campaign, executor: str, jobs: int | None) -> int:
 
 
 def run_campaign(path, *, engine: str | None = None, executor: str | None = None, jobs: int | None = None,
-                 rerun_failed: bool = False, dry_run: bool = False, output=None, stream=None,
-                 live: bool | None = None) -> RunReport:
+                 rerun_failed: bool = False, rerun_stale: bool = False, dry_run: bool = False, output=None,
+                 stream=None, live: bool | None = None) -> RunReport:
     stream = stream or sys.stdout
     campaign = load_campaign(path, output=output)
     executor = executor or campaign.execution.executor
@@ -92,27 +159,41 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
     report = RunReport(campaign.name, campaign.output, planned=len(planned))
     for w in rate_warnings([p.case for p in planned]):
         print(f"warning: {w}", file=stream, flush=True)
+    builds = engine_builds(p.engine for p in planned)
     if dry_run:
-        return _dry_run(campaign, planned, executor, stream, report, rerun_failed)
+        return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds)
 
     store = st.CampaignStore(campaign.output, create=True)
     with store, store.lock("campaign run"):
         store.register(planned)
         store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
-        todo, done, failed = _select(planned, store, rerun_failed)
+        stale = find_stale(planned, store.status(), builds)
+        todo, done, failed, kept_stale = _select(planned, store, rerun_failed, stale, rerun_stale)
         report.skipped_done, report.skipped_failed = len(done), len(failed)
         for p in done:
             report.statuses[p.case_id] = "done"
         indexed = store.statuses()
         for p in failed:
             report.statuses[p.case_id] = _state(store, indexed, p.case_id)
+        for p in kept_stale:    # an earlier recipe's result is not this recipe's; another build's is
+            report.statuses[p.case_id] = "stale" if stale[p.case_id].kind == "recipe" else "done"
         corrupt = sum(1 for p in failed if report.statuses[p.case_id] == "corrupt")
         print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
-              f"{len(failed)} failed (kept; --rerun-failed reruns them), {len(todo)} to run "
-              f"[{executor}] → {campaign.output}", file=stream, flush=True)
+              f"{len(failed)} failed (kept; --rerun-failed reruns them), "
+              + (f"{len(kept_stale)} stale (kept; --rerun-stale reruns them), " if kept_stale else "")
+              + f"{len(todo)} to run [{executor}] → {campaign.output}", file=stream, flush=True)
         if corrupt:
             print(f"campaign {campaign.name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
                   "status`); --rerun-failed reruns them", file=stream, flush=True)
+        kinds = sorted({stale[p.case_id].kind for p in kept_stale})
+        if kinds:
+            print(f"campaign {campaign.name}: stale = finished under another {' or '.join(kinds)} "
+                  "(`campaign status` lists them)", file=stream, flush=True)
+        for p in todo:
+            if p.case_id in stale and stale[p.case_id].kind == "engine build":
+                dest = _supersede(store, p.case_id)
+                print(f"rerun stale {p.case_id} ({p.label}): {stale[p.case_id].message.split(':')[0]}; "
+                      f"old folder → {dest}", file=stream, flush=True)
         for p in todo:
             if indexed.get(p.case_id) == "corrupt" and _state(store, indexed, p.case_id) == "corrupt":
                 row = store.row(p.case_id) or {}
@@ -165,7 +246,7 @@ def _sigterm(signum, frame):
 
 
 def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport,
-             rerun_failed: bool = False) -> RunReport:
+             rerun_failed: bool = False, rerun_stale: bool = False, builds: dict | None = None) -> RunReport:
     """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs).
     Finished folders are verified (through the index, as `campaign status` does): a corrupt one is
     listed as kept, or as rerun with `rerun_failed`."""
@@ -174,9 +255,10 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
     root = campaign.output / ".dry-run"
     engines = {}
     indexed: dict = {}
+    stale: dict = {}
     if campaign.output.is_dir():
         with st.CampaignStore(campaign.output) as store:
-            store.reconcile()
+            stale = find_stale(planned, store.status(), builds or {})
             indexed = store.statuses()
     print(f"campaign {campaign.name} (dry run, {executor}): {len(planned)} cases → {campaign.output}", file=stream)
     for p in planned:
@@ -184,7 +266,9 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
         state = st.folder_status(folder) if folder.exists() else "pending"
         if state == "done" and indexed.get(p.case_id) == "corrupt":
             state = "corrupt"
-        if state == "done":
+        if p.case_id in stale:
+            action = "rerun (stale)" if rerun_stale else "skip (stale)"
+        elif state == "done":
             action = "skip (done)"
         elif state in st.KEPT_STATUSES:
             action = f"rerun ({state})" if rerun_failed else f"skip ({state})"
@@ -201,7 +285,8 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
 
 
 def campaign_status(path, *, output=None, engine: str | None = None):
-    """(Campaign, planned cases, status DataFrame of the planned cases; pending where never run)."""
+    """(Campaign, planned cases, status DataFrame of the planned cases; pending where never run).
+    A stale case (find_stale) shows status 'stale', cause the kind, message the reason and fix."""
     import pandas as pd
 
     campaign = load_campaign(path, output=output)
@@ -214,7 +299,11 @@ def campaign_status(path, *, output=None, engine: str | None = None):
         return campaign, planned, df
     with st.CampaignStore(campaign.output) as store:
         store.register(planned)
-        df = store.status()
+        every = store.status()
+    stale = find_stale(planned, every, engine_builds(p.engine for p in planned))
     ids = [p.case_id for p in planned]
-    df = df.set_index("case_id").reindex(ids).reset_index()
-    return campaign, planned, df[[c for c in cols if c in df.columns]]
+    df = every.set_index("case_id").reindex(ids).reset_index()
+    for i, cid in enumerate(ids):
+        if cid in stale:
+            df.loc[i, ["status", "cause", "message"]] = ["stale", stale[cid].kind, stale[cid].message]
+    return campaign, planned, df[[c for c in cols + ["recipe_id", "engine_version"] if c in df.columns]]

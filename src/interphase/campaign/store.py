@@ -62,7 +62,8 @@ CORRUPT_CAUSES = ("bad_case_json", "id_mismatch", "missing_table", "bad_parquet"
 UNVERIFIABLE = "unverifiable"
 
 _COLUMNS = ("case_id", "engine", "grp", "label", "role", "pair_id", "status", "cause", "message", "started",
-            "finished", "elapsed", "attempts", "host", "slurm_job", "params", "summary", "updated", "checked")
+            "finished", "elapsed", "attempts", "host", "slurm_job", "params", "summary", "updated", "checked",
+            "recipe_id", "engine_version")
 _HIDDEN = ["params", "summary", "checked"]
 
 
@@ -238,6 +239,7 @@ def folder_record(folder: Path) -> dict | None:
            "finished": meta.get("finished"), "elapsed": meta.get("elapsed"), "host": meta.get("host"),
            "slurm_job": meta.get("slurm_job"), "params": json.dumps(meta.get("params", {}), sort_keys=True),
            "summary": None, "updated": time.time(), "checked": None}
+    row["recipe_id"], row["engine_version"] = run_identity(meta)
     try:
         row["attempts"] = sum(1 for line in open(folder / ATTEMPTS) if '"event": "start"' in line)
     except OSError:
@@ -256,6 +258,16 @@ def folder_record(folder: Path) -> dict | None:
         row["finished"] = fail.get("finished", row["finished"])
         row["elapsed"] = fail.get("elapsed", row["elapsed"])
     return row
+
+
+def run_identity(meta: dict) -> tuple[str | None, str | None]:
+    """(recipe id, engine build) of a case folder's case.json. A folder of the older id scheme has no
+    recipe id; its template hash stands for one ('template:<hash>'), so that its runs still group."""
+    prov = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
+    rid = prov.get("recipe_id") or meta.get("recipe_id")
+    if not rid and (prov.get("template_hash") or meta.get("template_hash")):
+        rid = f"template:{prov.get('template_hash') or meta.get('template_hash')}"
+    return rid, prov.get("engine_version") or meta.get("engine_version")
 
 
 # ---- the store --------------------------------------------------------------------------------
@@ -296,11 +308,14 @@ class CampaignStore:
             "CREATE TABLE IF NOT EXISTS cases (case_id TEXT PRIMARY KEY, engine TEXT, grp TEXT, label TEXT, "
             "role TEXT, pair_id TEXT, status TEXT, cause TEXT, message TEXT, started REAL, finished REAL, "
             "elapsed REAL, attempts INTEGER, host TEXT, slurm_job TEXT, params TEXT, summary TEXT, updated REAL, "
-            "checked TEXT)")
+            "checked TEXT, recipe_id TEXT, engine_version TEXT)")
         have = {r[1] for r in self._db.execute("PRAGMA table_info(cases)")}
-        if "checked" not in have:   # an index written before folders were verified
-            with contextlib.suppress(sqlite3.OperationalError):   # another reader added it first
-                self._db.execute("ALTER TABLE cases ADD COLUMN checked TEXT")
+        for col in ("checked", "recipe_id", "engine_version"):   # an index written by an older version
+            if col not in have:
+                with contextlib.suppress(sqlite3.OperationalError):   # another reader added it first
+                    self._db.execute(f"ALTER TABLE cases ADD COLUMN {col} TEXT")
+                # its finished rows are read from their folders again by the next reconcile()
+                self._db.execute("UPDATE cases SET checked = NULL")
 
     def close(self) -> None:
         self._db.close()
@@ -385,13 +400,13 @@ class CampaignStore:
 
         Rows marked queued/running are left alone (a run may be at work) unless `stale_running`:
         the caller holds the campaign lock, so nothing can be running."""
-        rows = list(self._db.execute("SELECT case_id, status, checked FROM cases"))
+        rows = list(self._db.execute("SELECT case_id, status, checked, recipe_id, engine_version FROM cases"))
         wanted = set(case_ids) if case_ids is not None else None
         fix = []
         if wanted is None:
             known = {r[0] for r in rows}
             fix = [r for r in (folder_record(self.root / cid) for cid in self.folder_ids() if cid not in known) if r]
-        for cid, status, checked in rows:
+        for cid, status, checked, rid, build in rows:
             if wanted is not None and cid not in wanted:
                 continue
             folder = self.root / cid
@@ -399,7 +414,9 @@ class CampaignStore:
             if not stale_running and status in ("queued", "running") and fs in ("pending", "incomplete"):
                 continue
             if fs == "done":
-                stale = status not in ("done", "corrupt") or checked != folder_fingerprint(folder)
+                # (no identity: indexed by a version that did not record it)
+                stale = (status not in ("done", "corrupt") or checked != folder_fingerprint(folder)
+                         or (rid is None and build is None))
             else:
                 stale = fs != status
             if stale:

@@ -375,28 +375,57 @@ def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
 
 
 def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.DataFrame:
-    """The finished runs a campaign file asks for, one per (label, engine): the run whose id the
-    current plan gives (this recipe) when it has finished, else the most recently finished one of
-    that label (an earlier recipe's, kept rather than rerun). Folders of labels the file no longer
-    asks for, and repeats of one label (a case run again under a new recipe), are left out;
-    `attrs["left_out"]` counts them and `attrs["earlier_recipe"]` the runs used from an earlier
-    recipe. Without this, a rerun under a new recipe counted every seed twice. `plan_options` go to
-    campaign.plan.plan (a test's recipe identity)."""
+    """The finished runs a campaign file asks for, of ONE recipe per engine: this version's recipe
+    when any of its runs has finished, else the recipe with the most finished runs (an earlier one,
+    read where it was run). Runs of other recipes and folders of labels the file no longer asks for
+    are left out, and counted: attrs `recipes` {engine: recipe id used}, `current` {engine: whether
+    it is this version's}, `other_recipe` and `not_asked` (runs left out). Mixing recipes would put
+    two protocols on one figure and count a case run again under a new recipe twice. `plan_options`
+    go to campaign.plan.plan (a test's recipe identity)."""
     from interphase.campaign.plan import plan
 
+    attrs = dict(recipes={}, current={}, other_recipe=0, not_asked=0)
     if summaries.empty:
-        summaries.attrs.update(left_out=0, earlier_recipe=0)
+        summaries.attrs.update(attrs)
         return summaries
     planned = plan(campaign, **plan_options)
+    current = {p.engine: p.recipe_id for p in planned}
     ids = {p.case_id for p in planned}
     wanted = {(p.label, p.engine) for p in planned}
     keys = list(zip(summaries["label"].astype(str), summaries["engine"].astype(str)))
-    df = summaries[[k in wanted for k in keys]].copy()
-    df["_current"] = df["case_id"].astype(str).isin(ids)
-    df = df.sort_values(["_current", "finished"], ascending=False, kind="stable")
-    out = df.drop_duplicates(["label", "engine"]).sort_index()
-    out.attrs.update(left_out=len(summaries) - len(out), earlier_recipe=int((~out["_current"]).sum()))
-    return out.drop(columns="_current")
+    asked = summaries[[k in wanted for k in keys]].copy()
+    attrs["not_asked"] = len(summaries) - len(asked)
+    rid = asked["recipe_id"] if "recipe_id" in asked else pd.Series(None, index=asked.index, dtype=object)
+    # a planned id is this recipe's whatever its folder recorded
+    asked["_recipe"] = rid.where(~asked["case_id"].astype(str).isin(ids), asked["engine"].map(current)).fillna("unknown")
+    keep = []
+    for engine, runs in asked.groupby("engine", sort=False):
+        now = current.get(engine)
+        counts = runs.groupby("_recipe")["finished"].agg(["size", "max"])
+        use = now if now in counts.index else counts.sort_values(["size", "max"]).index[-1]
+        attrs["recipes"][engine], attrs["current"][engine] = use, use == now
+        keep.append(runs[runs["_recipe"] == use])
+    out = pd.concat(keep).sort_index() if keep else asked
+    attrs["other_recipe"] = len(asked) - len(out)
+    out = out.drop(columns="_recipe")
+    out.attrs.update(attrs)
+    return out
+
+
+def recipe_notes(attrs: dict) -> list[str]:
+    """What one_run_per_case used and left out, as report lines."""
+    notes = []
+    for engine, rid in attrs.get("recipes", {}).items():
+        if not attrs["current"][engine]:
+            notes.append(f"{engine}: no finished run of this version's recipe; the report uses recipe {rid} "
+                         "(the one with most finished runs)")
+    if attrs.get("other_recipe"):
+        used = ", ".join(f"{e} {r}" for e, r in attrs["recipes"].items())
+        notes.append(f"{attrs['other_recipe']} finished run(s) of another recipe left out (used: {used}); "
+                     "`campaign status` lists the cases as stale, `campaign run --rerun-stale` reruns them")
+    if attrs.get("not_asked"):
+        notes.append(f"{attrs['not_asked']} finished folder(s) of cases the file no longer asks for left out")
+    return notes
 
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
@@ -407,12 +436,7 @@ def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: 
                                     lab=lab, n_boot=n_boot)
     finally:
         store.close()
-    if summ.attrs.get("left_out"):
-        res.warnings.append(f"{summ.attrs['left_out']} finished folder(s) left out: labels the file no longer asks "
-                            "for, or repeats of a case (one run per label is used, this recipe's first)")
-    if summ.attrs.get("earlier_recipe"):
-        res.warnings.append(f"{summ.attrs['earlier_recipe']} run(s) come from an earlier recipe (no run of this "
-                            "recipe yet): see the provenance line for the recipe ids")
+    res.warnings.extend(recipe_notes(summ.attrs))
     return res
 
 

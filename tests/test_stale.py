@@ -1,0 +1,129 @@
+"""A stale result is visible, never silently mixed (issue 17, item 2). On a copy of the session's real
+quick campaign (LIGGGHTS), cut to one seed of one surface (an interface case and its box test):
+
+- a recipe change (an engine's RECIPE_VERSIONS number bumped, as a template change must) makes every
+  finished case stale: `status` says so per case, `run` keeps them and says so (exit 1), `report`
+  uses one recipe and says which, `run --rerun-stale` reruns exactly those under the new recipe (new
+  folders; the old ones stay), after which `report` uses the new recipe only and counts the old runs
+  it left out;
+- another engine build on this machine (the one part faked: a second LIGGGHTS build cannot be
+  installed here) flags the finished cases, and `--rerun-stale` runs them again in their folders,
+  the old folders kept under .superseded/."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pandas as pd
+import pytest
+
+from interphase.campaign import plan as plan_mod
+from interphase.campaign import run as run_mod
+from interphase.campaign.run import campaign_status, run_campaign
+from interphase.cli import main
+from interphase.recipe import RECIPE_VERSIONS
+from interphase.report.build import build_report
+
+
+@pytest.fixture()
+def one_seed(quick_campaign, tmp_path):
+    out = tmp_path / "runs"
+    shutil.copytree(quick_campaign.parent / "runs", out, ignore=shutil.ignore_patterns(".campaign.lock", ".dry-run"))
+    text = quick_campaign.read_text().split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5]\nfriction_ps = [0.2]\nseed = [1]\n"
+    toml = tmp_path / "one.toml"
+    toml.write_text("\n".join(line for line in text.splitlines() if not line.startswith("output =")))
+    return toml, out
+
+
+def _status(toml, out):
+    _, _, df = campaign_status(toml, output=out)
+    return df.set_index("case_id")
+
+
+def _bump_liggghts_recipe(monkeypatch, tmp_path):
+    """This version's LIGGGHTS recipe becomes a new one, as when its RECIPE_VERSIONS number is bumped:
+    here and in the campaign's worker processes (spawned: they import the code afresh, so the bump
+    reaches them as a code change would, through a sitecustomize on their path)."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text("import interphase.recipe as r\nr.RECIPE_VERSIONS['liggghts'] += 1\n")
+    monkeypatch.setenv("PYTHONPATH", str(site))
+    monkeypatch.setitem(RECIPE_VERSIONS, "liggghts", RECIPE_VERSIONS["liggghts"] + 1)
+    plan_mod.engine_identity.cache_clear()
+
+
+def test_a_recipe_change_flags_keeps_and_reruns_exactly_the_stale_cases(one_seed, capsys, monkeypatch, tmp_path):
+    toml, out = one_seed
+    before = _status(toml, out)
+    assert (before["status"] == "done").all() and len(before) == 2
+    old_recipe = set(before["recipe_id"])
+    folders = {p.name for p in out.iterdir() if p.is_dir()}
+
+    _bump_liggghts_recipe(monkeypatch, tmp_path)
+    try:
+        df = _status(toml, out)
+        assert not set(df.index) & set(before.index)                       # new ids
+        assert (df["status"] == "stale").all() and (df["cause"] == "recipe").all()
+        assert all(f"folder {cid}" in m for cid, m in zip(before.index, df["message"])), df["message"].tolist()
+        assert main(["status", str(toml), "--output", str(out)]) == 0
+        assert "2 stale (recipe)" in capsys.readouterr().out
+
+        # the report uses the earlier recipe (no run of this one) and says so
+        res = build_report(toml, out=tmp_path / "rep0", n_boot=9, output=out)
+        assert any("no finished run of this version's recipe" in w and next(iter(old_recipe)) in w for w in res.warnings)
+
+        # a plain run keeps them and says so
+        assert main(["run", str(toml), "--output", str(out)]) == 1
+        said = capsys.readouterr().out
+        assert "2 stale (kept; --rerun-stale reruns them)" in said and "0 to run" in said
+        assert {p.name for p in out.iterdir() if p.is_dir()} == folders
+
+        # --rerun-stale runs exactly those, under the new recipe, in new folders
+        rep = run_campaign(toml, output=out, rerun_stale=True, live=False)
+        assert rep.ran == 2 and rep.exit_code == 0
+        after = _status(toml, out)
+        assert (after["status"] == "done").all() and set(after.index) == set(df.index)
+        assert not set(after["recipe_id"]) & old_recipe
+        assert folders <= {p.name for p in out.iterdir() if p.is_dir()}          # old folders stay
+
+        # the report now uses the new recipe only and counts what it left out
+        res = build_report(toml, out=tmp_path / "rep1", n_boot=9, output=out)
+        summ = pd.read_csv(tmp_path / "rep1" / "tables" / "summaries.csv")
+        assert set(summ["case_id"]) == set(after.index)
+        assert any("2 finished run(s) of another recipe left out" in w for w in res.warnings), res.warnings
+    finally:
+        plan_mod.engine_identity.cache_clear()
+
+
+def test_another_engine_build_flags_the_cases_and_reruns_them_in_place(one_seed, capsys, monkeypatch):
+    toml, out = one_seed
+    before = _status(toml, out)
+    built = before["engine_version"].iloc[0]
+    assert isinstance(built, str) and built.startswith("LIGGGHTS")
+    monkeypatch.setattr(run_mod, "engine_builds", lambda names: {n: "LIGGGHTS-PUBLIC 9.9" for n in names})
+    df = _status(toml, out)
+    assert (df["status"] == "stale").all() and (df["cause"] == "engine build").all()
+    assert all(built in m and "9.9" in m for m in df["message"])
+
+    assert main(["run", str(toml), "--output", str(out)]) == 0        # results of this recipe: kept, exit 0
+    assert "2 stale (kept" in capsys.readouterr().out
+
+    rep = run_campaign(toml, output=out, rerun_stale=True, live=False)
+    assert rep.ran == 2 and rep.exit_code == 0
+    superseded = sorted((out / ".superseded").iterdir())
+    assert sorted(p.name.rsplit("-", 1)[0] for p in superseded) == sorted(before.index)
+    for p in superseded:       # the old result, whole
+        assert (p / "DONE").exists() and json.loads((p / "case.json").read_text())["case_id"] in before.index
+    monkeypatch.undo()
+    after = _status(toml, out)
+    assert (after["status"] == "done").all() and set(after.index) == set(before.index)
+
+
+def test_a_machine_without_the_engine_flags_no_build(one_seed, monkeypatch, tmp_path):
+    toml, out = one_seed
+    empty = tmp_path / "empty-bin"
+    empty.mkdir()
+    monkeypatch.setenv("PATH", str(empty))
+    assert run_mod.engine_builds(["liggghts", "yade"]) == {"liggghts": None, "yade": None}
+    assert (_status(toml, out)["status"] == "done").all()
