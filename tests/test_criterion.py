@@ -88,12 +88,12 @@ def test_refuses_theta_a_outside_fitted_range(fitted):
 
 
 def test_cli_predict_dektak_is_non_dilative(capsys):
-    code, out, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json")
+    code, out, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json", "--fit", "study")
     assert code == 0, err
     d = json.loads(out)
     assert d["branch"] == "non-dilative" and d["source"] == "study defaults"
     assert d["efficiency"] == pytest.approx(math.tan(math.atan(0.2)) / d["tan_phi"])
-    code, text, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um")
+    code, text, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--fit", "study")
     assert code == 0 and "study defaults" in text.lower() and "STUDY DEFAULTS" in text
 
 
@@ -101,8 +101,8 @@ def test_cli_predict_sawtooth_gives_higher_e(capsys, tmp_path):
     prof = tmp_path / "saw45.txt"
     assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
     capsys.readouterr()
-    _, out_flat, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json")
-    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--json")
+    _, out_flat, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json", "--fit", "study")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--json", "--fit", "study")
     assert code == 0, err
     saw, flat = json.loads(out), json.loads(out_flat)
     assert saw["branch"].startswith("dilative") and saw["theta_a_deg"] == pytest.approx(39.3, abs=0.5)
@@ -123,12 +123,13 @@ def test_cli_predict_flat_spaced_profile_takes_the_fig_6_9_branch(capsys, tmp_pa
     prof = tmp_path / "spaced.txt"
     assert main(["profile", "spaced", "--rt", "1", "--sw", "2", "--sr", "1", "-o", str(prof)]) == 0
     capsys.readouterr()
-    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--json")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--json", "--fit", "study")
     assert code == 0, err
     d = json.loads(out)
     assert d["flat_spaced"] and d["branch"].startswith("flat-spaced") and d["filter"] == 90
     assert d["theta_a_deg"] == pytest.approx(d["theta_a_deg_90"])
-    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--filter", "92", "--json")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--filter", "92", "--json",
+                         "--fit", "study")
     assert code == 0 and json.loads(out)["branch"].startswith("dilative")
 
 
@@ -139,3 +140,49 @@ def test_cli_predict_fit_without_enough_cases_says_why(capsys, quick_campaign):
     code, _, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um",
                         "--fit", str(quick))
     assert code == 2 and "no fit: n =" in err
+
+
+def test_a_fitted_criterion_travels_as_json_with_its_intervals(fitted, tmp_path, capsys):
+    """criterion.json (what `campaign report` writes and the package ships for the reproduction)
+    gives back the same chain: predictions and bootstrap intervals on every branch."""
+    from interphase.report.build import load_criterion
+
+    path = tmp_path / "criterion.json"
+    path.write_text(json.dumps(fitted.to_dict({"physical_cases": 300, "groups": ["g1"]}), allow_nan=False))
+    back = load_criterion(path)
+    assert "300 physical cases" in back.source and set(back.theta_r) == set(fitted.theta_r)
+    for mu, a in ((0.2, 30.0), (0.05, 10.0), (0.35, 45.0)):      # 0.35: blended between two frictions
+        p, q = predict(fitted, mu, a, a), predict(back, mu, a, a)
+        assert q.tan_delta == pytest.approx(p.tan_delta, rel=1e-9)
+        assert q.tan_delta_interval == pytest.approx(p.tan_delta_interval, rel=1e-4)
+        assert all(math.isfinite(v) for v in q.theta_r_interval + q.efficiency_interval)
+    p, q = predict(fitted, 0.05, 30.0, 30.0, flat_spaced=True), predict(back, 0.05, 30.0, 30.0, flat_spaced=True)
+    assert q.theta_r_deg == pytest.approx(p.theta_r_deg) and q.theta_r_interval == pytest.approx(p.theta_r_interval, rel=1e-4)
+
+    prof = tmp_path / "saw45.txt"
+    assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
+    capsys.readouterr()
+    code, text, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", str(path))
+    assert code == 0, err
+    assert "300 physical cases" in text and "[" in text.split("tan δ")[1].splitlines()[0]   # with its interval
+
+    path.write_text(json.dumps({"schema": "something else"}))
+    code, _, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", str(path))
+    assert code == 2 and str(path) in err and "campaign report" in err
+
+
+def test_predict_uses_the_reproduction_fits_by_default(capsys, tmp_path):
+    """No --fit: the reproduction's fits shipped with the package, said so, with intervals; or, while
+    the reproduction lacks a correlation, an exit-2 message naming it."""
+    from interphase.report.build import REPRODUCTION
+
+    assert REPRODUCTION.exists(), "the package ships the reproduction's criterion.json"
+    prof = tmp_path / "saw45.txt"
+    assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
+    capsys.readouterr()
+    code, text, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2")
+    if code == 0:
+        assert "the reproduction's" in text and "STUDY DEFAULTS" not in text
+        assert "[" in text.split("tan δ")[1].splitlines()[0]
+    else:
+        assert code == 2 and "criterion_reproduction.json" in err and "--fit study" in err, err

@@ -386,13 +386,14 @@ def _add_report(sub) -> None:
     p.add_argument("profile", help="profile file: Dektak export or two columns x z")
     p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
     p.add_argument("--friction", type=float, required=True, help="particle–surface friction tan φμ [-]")
-    p.add_argument("--fit", default=None, help="campaign file (TOML) whose fitted correlations to use "
-                   "(default: the study defaults, approximate readings of its figures)")
+    p.add_argument("--fit", default=None, help="correlations to use: a campaign file (TOML, fitted on its finished "
+                   "cases), a criterion.json written by `campaign report`, or 'study' (approximate readings of the "
+                   "study's figures); default: the reproduction's fits shipped with the package (docs/reproduction.md)")
     p.add_argument("--filter", type=int, default=None, choices=(92, 90),
                    help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
     p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
-    p.add_argument("--tan-phi", type=float, default=None, help="tan φ of the granular material (default: the "
-                   "campaign's box tests, or tan 30° with the study defaults)")
+    p.add_argument("--tan-phi", type=float, default=None, help="tan φ of YOUR granular material (default: the "
+                   "fitted campaign's box tests — the simulated soil —, or tan 30° with the study's readings)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_predict)
 
@@ -478,6 +479,10 @@ def _cmd_predict(args) -> int:
     iv = lambda pair, fmt: "" if not all(map(math.isfinite, pair)) else f"  [{pair[0]:{fmt}}, {pair[1]:{fmt}}]"
     if model.is_default:
         print("*** STUDY DEFAULTS: approximate readings of the study's published figures, not fitted correlations ***")
+    elif args.fit is None:
+        print("fits: the reproduction's (campaigns/study.toml, seed-bootstrap 95 % intervals; docs/reproduction.md)")
+    if args.tan_phi is None and not model.is_default:
+        print(f"note: tan φ = {model.tan_phi:.3f} is the fitted campaign's simulated soil; give --tan-phi for yours")
     print(f"profile     {args.profile}  (D50 = {args.d50:g} mm, tan φμ = {args.friction:g}, source: {p.source})")
     print(f"surface     {'regular flat spacing: ' if flat_spaced else ''}{why}; mean asperity slope {res.mean_slope_deg:.2f}°")
     print(f"branch      {p.branch}, θa filter {p.filter}")

@@ -40,6 +40,14 @@ MIN_FLAT_SHARE = 0.10        # flats must cover ≥ 10 % of the length …
 MAX_FLAT_CV = 0.25           # … in runs of nearly equal length (coefficient of variation)
 
 
+CRITERION_SCHEMA = "interphase-dem criterion 1"
+
+
+def _finite(d: dict) -> dict:
+    """NaN → None (strict JSON)."""
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+
+
 class _Curve:
     """A default correlation: predict(x) plus no interval."""
 
@@ -90,6 +98,42 @@ class CriterionModel:
         tp = math.tan(math.radians(DEFAULT_PHI_DEG)) if tan_phi is None else tan_phi
         return cls(source="study defaults", tan_phi=tp, theta_r={friction: default_theta_r(friction)},
                    ratio=default_ratio(), efficiency=default_efficiency(tp), is_default=True)
+
+    def to_dict(self, about: dict | None = None) -> dict:
+        """JSON data of a FITTED model (every fit with its bootstrap refits, so intervals survive):
+        what `campaign report` writes as criterion.json and `campaign predict` reads back."""
+        if self.is_default:
+            raise ValueError("the study defaults are readings, not fits: nothing to write")
+
+        def fit(f):
+            if f is None:
+                return None
+            boots = np.asarray(f.extra.get("boot_params", np.empty((0, 0))), float)
+            return _finite(f.to_dict()) | {"boot_params": np.round(boots, 6).tolist()}
+
+        return {"schema": CRITERION_SCHEMA, "source": self.source, "about": about or {},
+                "tan_phi": self.tan_phi if math.isfinite(self.tan_phi) else None,
+                "theta_r": {str(k): fit(f) for k, f in self.theta_r.items()},
+                "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons)}
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "criterion.json") -> "CriterionModel":
+        from interphase.analysis.correlations import BilinearFit
+
+        if d.get("schema") != CRITERION_SCHEMA:
+            raise InputError(f"not a criterion file of this version (schema {d.get('schema')!r}, expected "
+                             f"{CRITERION_SCHEMA!r})", where=where, fix="write it again with `campaign report`")
+
+        def fit(x):
+            if x is None:
+                return None
+            f = BilinearFit.from_dict({k: (math.nan if v is None else v) for k, v in x.items() if k != "boot_params"})
+            f.extra["boot_params"] = np.asarray(x.get("boot_params") or [], float)
+            return f
+
+        return cls(source=d["source"], tan_phi=math.nan if d.get("tan_phi") is None else float(d["tan_phi"]),
+                   theta_r={("all" if k == "all" else float(k)): fit(v) for k, v in d["theta_r"].items()},
+                   ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}))
 
     @classmethod
     def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
@@ -209,7 +253,7 @@ def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
         notes.append(f"no θa–θr fit for friction {friction:g}: the pooled fit (all frictions) is used")
         return model.theta_r["all"]
     raise InputError(f"no θa–θr correlation in {model.source}: " + model.reasons.get("fig6_8", "no data"),
-                     where="--fit", fix="run more cases, or leave out --fit for the study defaults")
+                     where="--fit", fix="run more cases, or `--fit study` for the study's readings")
 
 
 def _check_range(fit, value: float, what: str, source: str) -> None:

@@ -62,6 +62,18 @@ def ensemble_points(summaries: pd.DataFrame, store=None, *, seed: int = 0,
     return seed_ensemble(runs, states, table, seed=seed), table
 
 
+def write_criterion(model: CriterionModel, points: pd.DataFrame, path: Path, prov: str) -> Path:
+    """criterion.json: the fitted chain with its seed-bootstrap refits and what it was fitted on
+    (`campaign predict --fit FILE.json` reads it; the package ships the reproduction's)."""
+    col = lambda c: points[c] if c in points else pd.Series(dtype=object)
+    about = {"provenance": prov, "physical_cases": int(len(points)),
+             "interface_runs": int(pd.to_numeric(col("seeds"), errors="coerce").fillna(1).sum()) if len(points) else 0,
+             "groups": sorted(map(str, col("group").dropna().unique())),
+             "frictions": sorted(float(x) for x in pd.to_numeric(col("friction_ps"), errors="coerce").dropna().unique())}
+    path.write_text(json.dumps(model.to_dict(about), indent=1, allow_nan=False) + "\n")
+    return path
+
+
 def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionModel:
     """The criterion's chain from fit_study's results (the fits the report draws, seed-bootstrap
     intervals included), as CriterionModel.from_points would fit them."""
@@ -207,6 +219,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
 
     if len(summaries):
         res.files.append(write_summaries(summaries, tdir / "summaries.csv"))
+    chain = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
+    if chain.theta_r or chain.ratio is not None or chain.efficiency is not None:
+        res.files.append(write_criterion(chain, points, out / "criterion.json", prov))
 
     # ---- tables
     tables: list[T.Table] = []
@@ -452,14 +467,44 @@ def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel
                                f"campaign {campaign.name}")
 
 
+#: the criterion fitted on the reproduction (campaigns/study.toml, docs/reproduction.md): `campaign
+#: report campaigns/study.toml` writes it as <report>/criterion.json; it is copied here when the
+#: committed summaries are updated
+REPRODUCTION = Path(__file__).resolve().parents[1] / "data" / "criterion_reproduction.json"
+
+
+def load_criterion(path: str | Path) -> CriterionModel:
+    """A criterion.json written by `campaign report`; its source says what it was fitted on."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read the criterion file: {exc}", where=str(path),
+                         fix="give a criterion.json written by `campaign report`, or a campaign file") from None
+    model = CriterionModel.from_dict(data, where=str(path))
+    about = data.get("about") or {}
+    if about:
+        model.source = (f"{model.source} ({about.get('physical_cases', '?')} physical cases, groups "
+                        f"{', '.join(about.get('groups', [])) or '?'}; {path.name})")
+    return model
+
+
 def criterion_model(friction: float, fit: str | Path | None = None, tan_phi: float | None = None) -> CriterionModel:
-    """The model `campaign predict` runs: fitted on the campaign file `fit`, else the study defaults
-    for `friction`; `tan_phi` (> 0) replaces the campaign's (or the defaults') tan φ."""
-    if fit is None:
+    """The model `campaign predict` runs. `fit`: None → the reproduction's fits (REPRODUCTION);
+    'study' → the study defaults for `friction` (readings of its figures); a criterion.json; a
+    campaign file (fitted on its finished cases). `tan_phi` (> 0) replaces the model's tan φ."""
+    if fit == "study":
         return CriterionModel.study_defaults(friction, tan_phi)
-    model = fitted_model(fit)
+    if fit is None or str(fit).endswith(".json"):
+        path = REPRODUCTION if fit is None else Path(fit)
+        if fit is None and not path.exists():
+            raise InputError(f"this installation has no reproduction fits ({path} is missing)", where="--fit",
+                             fix="give a campaign file or a criterion.json, or `--fit study` for the study's readings")
+        model = load_criterion(path)
+    else:
+        model = fitted_model(fit)
     if tan_phi is not None:
         model.tan_phi = tan_phi
     if not math.isfinite(model.tan_phi):
-        raise InputError("the campaign has no finished box test, so no tan φ", where="--fit", fix="give --tan-phi")
+        raise InputError(f"{model.source} has no finished box test, so no tan φ", where="--fit", fix="give --tan-phi")
     return model
