@@ -171,3 +171,24 @@ def test_a_random_case_measures_the_surface_its_engine_shears():
     assert whole.x[0] == pytest.approx(-case.surface_margin) and whole.x[-1] >= case.box_length + 4e-3
     assert sheared.x[0] == 0.0 and sheared.x[-1] == pytest.approx(case.box_length + 4e-3)
     np.testing.assert_allclose(np.interp(sheared.x, whole.x, whole.z), sheared.z, atol=1e-15)
+
+
+def test_a_line_gives_theta_a_for_shear_both_ways(tmp_path, capsys):
+    """A ratchet (steep flanks facing +x, gentle ones facing −x) resists differently in +x and −x;
+    a symmetric saw-tooth the same both ways. −x is the mirrored line, as an independent check."""
+    from interphase.surface.normals import theta_a
+    from interphase.surface.profiles import Profile
+
+    x = np.linspace(0, 14.0, 14001)                     # mm; teeth 2 mm long, 1 mm high
+    ratchet = np.where((x % 2.0) < 1.6, (x % 2.0) / 1.6, (2.0 - x % 2.0) / 0.4)
+    f = tmp_path / "ratchet.txt"
+    f.write_text("\n".join(f"{a} {b}" for a, b in zip(x, ratchet)))
+    assert main(["theta-a", str(f), "--d50", "0.7", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)["directions"]
+    plus, minus = d["+x"]["theta_a_deg"], d["-x"]["theta_a_deg"]
+    assert abs(plus - minus) > 5.0, (plus, minus)
+    mirrored = theta_a(Profile(-x[::-1] * 1e-3, ratchet[::-1] * 1e-3), 0.7e-3)
+    assert minus == pytest.approx(mirrored.theta_a_deg, abs=0.2)     # the reader levels the line first
+    assert main(["theta-a", str(f), "--d50", "0.7"]) == 0
+    text = capsys.readouterr().out
+    assert "θa (+x)" in text and "θa (-x)" in text

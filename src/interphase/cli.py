@@ -118,17 +118,22 @@ def _cmd_theta_a(args) -> int:
         raise InputError("a line scan has only the x axis", where="--axis", fix="omit --axis for a line")
     from interphase.surface.normals import theta_a
 
-    res = theta_a(_load_measured(args.profile, args.units, args.cutoff), d50, args.filter)
+    prof = _load_measured(args.profile, args.units, args.cutoff)
+    res = theta_a(prof, d50, args.filter)
+    back = theta_a(prof.mirrored(), d50, args.filter)      # shear in −x: the other flanks resist
     out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "areal": False,
-                           "units": scan.units, "reader": scan.reader}
+                           "units": scan.units, "reader": scan.reader,
+                           "directions": {"+x": res.to_dict() | {"direction": "+x"},
+                                          "-x": back.to_dict() | {"direction": "-x"}}}
     if args.json:
         _print_json(out)
         return 0
     print(f"profile            {args.profile}  (D50 = {args.d50:g} mm, filter {args.filter}°)")
-    if res.dilative:
-        print(f"θa                 {res.theta_a_deg:.2f}° from vertical  ({res.theta_a_ccw_deg:.2f}° ccw from +x)")
-    else:
-        print(f"θa                 undefined — {res.reason}")
+    for d, r in (("+x", res), ("-x", back)):
+        if r.dilative:
+            print(f"θa ({d})            {r.theta_a_deg:.2f}° from vertical  ({r.theta_a_ccw_deg:.2f}° ccw from {d})")
+        else:
+            print(f"θa ({d})            undefined — {r.reason}")
     print(f"Rn, Rnc(D50)       {res.rn:.4f}, {res.rnc:.4f}")
     print(f"mean asperity slope {res.mean_slope_deg:.2f}° (flats < 2° excluded)")
     print(f"trace points       {res.n_points}")
