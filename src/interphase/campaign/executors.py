@@ -49,14 +49,14 @@ def interrupted_result(case_id: str, message: str = "interrupted") -> dict:
             "message": message, "elapsed": None}
 
 
-def record_interrupted(folder: Path, message: str) -> None:
+def record_interrupted(folder: Path, message: str, cause: str = "interrupted") -> None:
     """Mark an unfinished case folder as interrupted (never touches a DONE or recorded failure)."""
     folder = Path(folder)
     if folder_terminal(folder):
         return
     if (folder / st.CASE_JSON).exists():
         now = time.time()
-        st.write_json_atomic(folder / st.FAILURE_JSON, {"status": "interrupted", "cause": "interrupted",
+        st.write_json_atomic(folder / st.FAILURE_JSON, {"status": "interrupted", "cause": cause,
                                                         "message": message, "finished": now, "log_tail": ""})
 
 
@@ -66,20 +66,37 @@ def folder_terminal(folder: Path) -> bool:
 
 # ---- local ----------------------------------------------------------------------------------
 _EVENTS = None
+_STOP_REASON: str | None = None      # why a worker stops itself (its campaign process died)
 
 
-def _worker_init(events) -> None:
+def _watch_parent(ppid: int) -> None:
+    """A pool worker outlives a campaign process killed hard (SIGKILL, the out-of-memory killer): it
+    would finish its case, start the next one it was handed, then idle forever. It stops instead:
+    SIGTERM to itself, which records its running case as interrupted and ends the worker."""
+    global _STOP_REASON
+    while os.getppid() == ppid:
+        time.sleep(0.5)
+    _STOP_REASON = f"the campaign process (pid {ppid}) died"
+    os.kill(os.getpid(), signal.SIGTERM)
+
+
+def _worker_init(events, ppid: int | None = None) -> None:
     global _EVENTS
     _EVENTS = events
     # an idle worker ignores Ctrl-C; a running case turns it into a recorded interruption
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if ppid is not None:
+        import threading
+
+        threading.Thread(target=_watch_parent, args=(ppid,), name="watch-parent", daemon=True).start()
 
 
 def _raise_interrupted(signum, frame):
     # one interruption per case: further signals would cut the recording of this one short
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    raise Interrupted(signal.Signals(signum).name)
+    name = signal.Signals(signum).name
+    raise Interrupted(f"{name}: {_STOP_REASON}" if _STOP_REASON else name)
 
 
 def _local_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
@@ -90,10 +107,68 @@ def _local_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
         _EVENTS.put(("started", meta["case_id"], {"pid": os.getpid()}))
         return run_case(case, engine, folder, meta)
     except (Interrupted, KeyboardInterrupt, SystemExit) as exc:
-        return interrupted_result(meta["case_id"], f"stopped: {getattr(exc, 'reason', type(exc).__name__)}")
+        reason = getattr(exc, "reason", type(exc).__name__)
+        if reason.startswith("SIGTERM"):
+            # the pool tears its workers down (another worker died) or the campaign process is
+            # gone: the case is recorded; this worker must not take another one
+            os._exit(143)
+        return interrupted_result(meta["case_id"], f"stopped: {reason}")
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _gone(pid: int | None, wait: float) -> bool:
+    """Wait up to `wait` s for process `pid` to end (a zombie counts as ended)."""
+    from interphase.campaign.runner import _not_zombie
+
+    deadline = time.monotonic() + wait
+    while pid:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        except PermissionError:
+            pass
+        if os.path.exists(f"/proc/{pid}") and not _not_zombie(pid):
+            return True
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def lost_result(task: Task, exc: BaseException, pid: int | None) -> dict:
+    """The verdict on a case whose worker gave no result (`exc`: BrokenProcessPool when a worker of
+    the pool died, which fails every running and queued case of the pool). Waits for the case's
+    worker to be gone (it may be recording its own end), kills an engine it left behind, then takes
+    the folder's word, else records the case as interrupted with the cause."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from interphase.campaign.runner import disk_full, kill_stale_engines
+
+    folder = Path(task.folder)
+    _gone(pid, 30.0)
+    if folder.is_dir():
+        kill_stale_engines(folder)
+    if folder_terminal(folder):
+        fail = st.read_json(folder / st.FAILURE_JSON) or {}
+        return {"case_id": task.case_id, "status": st.folder_status(folder), "cause": fail.get("cause"),
+                "message": fail.get("message")}
+    if pid is None and not (folder / st.CASE_JSON).exists():
+        return {"case_id": task.case_id, "status": "pending", "skipped": True}   # never started
+    if isinstance(exc, BrokenProcessPool):
+        cause = "worker_died"
+        message = (f"its worker process (pid {pid}) died mid-case without recording anything (killed by a "
+                   "signal: SIGKILL, the out-of-memory killer); its engine was stopped, the case is rerun")
+    else:
+        cause = "disk_full" if disk_full(exc, folder) else "runner_error"
+        message = f"{type(exc).__name__}: {str(exc).splitlines()[0][:300] if str(exc) else ''}"
+    try:
+        record_interrupted(folder, message, cause)
+    except OSError as err:
+        message += f" (could not be recorded in {folder}: {err})"
+    return {"case_id": task.case_id, "status": "interrupted", "cause": cause, "message": message}
 
 
 class LocalExecutor:
@@ -109,7 +184,7 @@ class LocalExecutor:
         events = ctx.Queue()
         workers: dict[str, int] = {}
         with ProcessPoolExecutor(max_workers=min(self.jobs, len(tasks)), mp_context=ctx,
-                                 initializer=_worker_init, initargs=(events,)) as pool:
+                                 initializer=_worker_init, initargs=(events, os.getpid())) as pool:
             futures = {pool.submit(_local_task, t.case, t.engine, str(t.folder), t.meta): t for t in tasks}
             pending = set(futures)
 
@@ -127,12 +202,7 @@ class LocalExecutor:
                 try:
                     res = fut.result()
                 except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
-                    if folder_terminal(t.folder):
-                        res = {"case_id": t.case_id, "status": st.folder_status(t.folder)}
-                    else:
-                        res = {"case_id": t.case_id, "status": "interrupted", "cause": "worker_died",
-                               "message": f"{type(exc).__name__}: {exc}"}
-                        record_interrupted(t.folder, res["message"])
+                    res = lost_result(t, exc, workers.get(t.case_id))
                 workers.pop(t.case_id, None)
                 on_event("finished", t.case_id, res)
 
@@ -194,6 +264,8 @@ SLURM_DEATH = {
 }
 ACTIVE_STATES = ("PENDING", "RUNNING", "REQUEUED", "RESIZING", "SUSPENDED", "CONFIGURING", "COMPLETING",
                  "REQUEUE_HOLD", "REQUEUE_FED", "SIGNALING", "STAGE_OUT")
+#: states of a job SLURM requeued, which will run its task again (not REQUEUE_HOLD: held until released)
+REQUEUED_STATES = ("PENDING", "REQUEUED", "REQUEUE_FED")
 #: [s] how long a task that recorded an interruption may wait for SLURM's final job state (TIMEOUT,
 #: CANCELLED, PREEMPTED), whose cause replaces the runner's 'interrupted'
 SLURM_VERDICT_WAIT = 60.0
@@ -299,7 +371,15 @@ class SlurmExecutor:
                     final = bool(state) and state not in ACTIVE_STATES
                     if not (final or job.paths.result_pickle.exists()):
                         continue
-                    if not final and st.folder_status(t.folder) == "interrupted":
+                    fs = st.folder_status(t.folder)
+                    if not final and (state in REQUEUED_STATES or fs in ("pending", "incomplete")):
+                        # requeued (scontrol requeue, preemption): the job runs the case again; the
+                        # result pickle is the stopped run's. Wait for the new run, announce its start
+                        interrupted_at.pop(cid, None)
+                        if state != "RUNNING":
+                            announced.discard(cid)
+                        continue
+                    if not final and fs == "interrupted":
                         # the task caught SIGTERM and returned before SLURM closed the job: its
                         # state (TIMEOUT, CANCELLED, ...) is the verdict, wait for it a while
                         since = interrupted_at.setdefault(cid, time.monotonic())

@@ -192,7 +192,9 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
             # submitit's answer to SLURM's time-limit signal: the job is out of time
             _failure(folder, "killed", "slurm_timeout", f"SLURM time limit reached during {stage}: {exc}", started)
             raise
-        if isinstance(exc, EngineError):
+        if disk_full(exc, folder):
+            data = _record_disk_full(folder, stage, exc, started)
+        elif isinstance(exc, EngineError):
             d = exc.to_dict()
             data = _failure(folder, "failed", d["cause"], d["message"], started, d.get("log_tail") or "",
                             returncode=d.get("returncode"), command=d.get("command"), stage=stage)
@@ -200,10 +202,62 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
             cause = {"write_input": "input_error", "read_results": "read_error",
                      "summarise": "analysis_error"}.get(stage, "runner_error")
             tb = traceback.format_exc(limit=8)
-            data = _failure(folder, "failed", cause, f"{type(exc).__name__} during {stage}: {exc}", started,
-                            st_tail(folder), traceback=tb, stage=stage)
-        return {"case_id": cid, "status": "failed", "skipped": False, "cause": data["cause"],
+            try:
+                data = _failure(folder, "failed", cause, f"{type(exc).__name__} during {stage}: {exc}", started,
+                                st_tail(folder), traceback=tb, stage=stage)
+            except OSError as rec:
+                if not disk_full(rec, folder):
+                    raise
+                data = _record_disk_full(folder, stage, exc, started)
+        return {"case_id": cid, "status": data["status"], "skipped": False, "cause": data["cause"],
                 "message": data["message"], "elapsed": data["elapsed"]}
+
+
+#: below this many free bytes a failed case is taken for a full disk (an engine that cannot write
+#: may end "successfully" with its dumps cut short: LIGGGHTS does, return code 0)
+DISK_FULL_BYTES = 256 * 1024
+_KEEP_ON_DISK_FULL = (st.ATTEMPTS, st.CASE_JSON, "engine.log")
+
+
+def _free_bytes(folder: Path) -> int | None:
+    try:
+        s = os.statvfs(folder)
+    except (OSError, AttributeError):
+        return None
+    return (s.f_bfree if os.geteuid() == 0 else s.f_bavail) * s.f_frsize
+
+
+def disk_full(exc: BaseException, folder: Path) -> bool:
+    """Did `exc` come of a full disk: an OSError ENOSPC/EDQUOT anywhere in its chain, or next to no
+    space left on the folder's file system when it was raised."""
+    import errno
+
+    e = exc
+    while e is not None:
+        if isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT):
+            return True
+        e = e.__cause__ or e.__context__
+    free = _free_bytes(folder)
+    return free is not None and free < DISK_FULL_BYTES
+
+
+def _record_disk_full(folder: Path, stage: str, exc: BaseException, started: float) -> dict:
+    """A case that ran out of space is not finished, nor its own fault: its partial engine output
+    (dumps, tables) is removed so that the failure can be written and the campaign go on; status
+    'interrupted' (rerun by the next `campaign run`), cause disk_full. case.json, attempts.jsonl and
+    engine.log are kept."""
+    tail = st_tail(folder)
+    for p in folder.iterdir():
+        if p.name in _KEEP_ON_DISK_FULL:
+            continue
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    why = str(exc).split("\n", 1)[0][:300]
+    message = (f"no space left on device in {folder} during {stage} ({type(exc).__name__}: {why}); its partial "
+               "engine output was removed. Free space, then run the same command again: the case is rerun")
+    return _failure(folder, "interrupted", "disk_full", message, started, tail, stage=stage)
 
 
 def run_single(case: Case, engine_name: str, folder: str | os.PathLike) -> dict:

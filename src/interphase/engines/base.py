@@ -33,8 +33,11 @@ from interphase.recipe import RECIPE, Recipe, read_record
 from interphase.tables import Results
 
 #: classified causes of an engine failure
-CAUSES = ("lost_atoms", "not_consolidated", "bad_mesh", "timeout", "killed", "engine_error", "missing_output",
-          "not_installed")
+CAUSES = ("lost_atoms", "not_consolidated", "bad_mesh", "timeout", "killed", "crashed", "engine_error",
+          "missing_output", "not_installed")
+#: signals an engine dies of by itself (a crash), not sent from outside
+CRASH_SIGNALS = tuple(getattr(signal, n) for n in ("SIGSEGV", "SIGBUS", "SIGFPE", "SIGILL", "SIGABRT")
+                      if hasattr(signal, n))
 
 
 class EngineError(RuntimeError):
@@ -194,6 +197,8 @@ class Engine(abc.ABC):
         rc = run_logged(cmd, folder, self.environment(), self.timeout_for(folder), self.label)
         log = folder / "engine.log"
         cause, message = self.diagnose(folder, rc)
+        if rc is not None and rc < 0 and cause in ("killed", "engine_error"):
+            cause, message = died_of_signal(self.label, -rc)
         if cause:
             raise EngineError(cause, message, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
         for name in self.outputs:
@@ -204,6 +209,20 @@ class Engine(abc.ABC):
     @abc.abstractmethod
     def read_results(self, folder: str | os.PathLike) -> Results:
         """ContactTable + History of a finished run, in the analysis frame."""
+
+
+def died_of_signal(label: str, sig: int) -> tuple[str, str]:
+    """(cause, message) of an engine ended by signal `sig`: 'crashed' for a signal a process raises
+    itself (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT), else 'killed' (sent from outside)."""
+    try:
+        name = signal.Signals(sig).name
+    except ValueError:
+        name = f"signal {sig}"
+    what = f"{name}, {signal.strsignal(sig) or 'unknown signal'}"
+    if sig in CRASH_SIGNALS:
+        return "crashed", f"{label} crashed ({what}): its output is not used"
+    return "killed", (f"{label} was killed by {what} from outside (the out-of-memory killer, an administrator, "
+                      "a batch system)")
 
 
 @functools.lru_cache(maxsize=None)
