@@ -265,3 +265,23 @@ def test_selfaffine_kind():
     assert Case(profile=spec, device="periodic", **SMALL).surface().periodic
     with pytest.raises(InputError):
         ProfileSpec.make("selfaffine", hurst=1.2, rms_slope=0.5, long_cutoff=10, short_cutoff=0.2, length=30, seed=1)
+
+
+@pytest.mark.liggghts
+def test_a_measured_line_runs_through_the_engine(tmp_path):
+    """Group 5's path for real: a grid line of a shipped FRT scan (mm relief, missing points) as the
+    periodic device's surface, through LIGGGHTS, to a summary — tiny (16 × 8 D50, 1 mm of shear)."""
+    from interphase.campaign.runner import run_single
+
+    from .conftest import need_binary
+
+    need_binary("liggghts")
+    spec = ProfileSpec.from_file(ROOT / "campaigns" / "profiles" / "frt-2.frt", units=None, axis="x", line="2/3",
+                                 direction="-")
+    case = Case(profile=spec, device="periodic", box_length_d50=16, box_height_d50=8, shear_distance=1e-3,
+                snapshot_every=5e-4, shear_modulus=50e6, friction_ps=0.5)
+    res = run_single(case, "liggghts", tmp_path / "case")
+    assert res["status"] == "done", res
+    s = res["summary"]
+    assert 0.05 < s["peak_stress_ratio"] < 1.5 and s["n_contacts_surface"] > 0 and s["grains_left"] == 0
+    assert s["rn"] < 0.01               # the scan's line: nearly flat at D50 0.7 mm, as theta-a says
