@@ -111,7 +111,10 @@ class Progress:
             if not self.live:
                 c = self.counts()
                 n = sum(c.get(k, 0) for k in ("done", "failed", "killed", "interrupted"))
-                extra = f" [{info.get('cause')}] {str(info.get('message') or '')[:120]}" if status != "done" else ""
+                msg = str(info.get("message") or "")
+                tag = f"[{info.get('cause')}]"
+                msg = msg[len(tag):].lstrip() if msg.startswith(tag) else msg    # EngineError says its cause
+                extra = f" {tag} {msg[:240]}" if status != "done" else ""
                 self._line(f"  {status:<11} {case_id}  {label}  {_fmt_s(el)}  ({n}/{len(self.items)}, "
                            f"ETA {_fmt_s(self.eta())}){extra}")
 

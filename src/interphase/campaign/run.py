@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sqlite3
 import sys
 import time
 from dataclasses import dataclass, field
@@ -44,13 +45,17 @@ class RunReport:
     ran: int = 0
     statuses: dict = field(default_factory=dict)      # case id → status of this run
     interrupted: bool = False
+    stopped: str | None = None                        # why the run stopped early (not a user's Ctrl-C)
 
     def count(self, status: str) -> int:
         return sum(1 for s in self.statuses.values() if s == status)
 
     @property
     def exit_code(self) -> int:
-        """0: every case of the campaign is finished; 1: some failed or were killed; 130: interrupted."""
+        """0: every case of the campaign is finished; 1: some failed or were killed, or the run stopped
+        itself (a full disk); 130: interrupted."""
+        if self.stopped:
+            return 1
         if self.interrupted:
             return 130
         return 0 if all(s == "done" for s in self.statuses.values()) and not self.skipped_failed else 1
@@ -214,28 +219,48 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
                                                                           campaign.execution.time_limit))
         progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name)
 
+        index_trouble: list[str] = []
+
         def on_event(kind: str, cid: str, info: dict) -> None:
-            if kind == "started":
-                store.set_status(cid, "running", slurm_job=info.get("slurm_job"), started=time.time())
-            elif kind == "finished":
-                row = store.record_result(cid)
-                report.statuses[cid] = row.get("status", info.get("status"))
-                if info.get("status") != "pending":
-                    report.ran += 1
+            try:
+                if kind == "started":
+                    store.set_status(cid, "running", slurm_job=info.get("slurm_job"), started=time.time())
+                elif kind == "finished":
+                    row = store.record_result(cid)
+                    report.statuses[cid] = row.get("status", info.get("status"))
+            except sqlite3.OperationalError as exc:   # e.g. the disk is full: the folders stay the truth
+                if not index_trouble:
+                    print(f"campaign {campaign.name}: the index could not be written ({exc}); the case folders are "
+                          "the record, the next command re-reads them", file=stream, flush=True)
+                index_trouble.append(cid)
+                report.statuses[cid] = info.get("status")
+            if kind == "finished" and info.get("status") != "pending":
+                report.ran += 1
             progress.event(kind, cid, info)
+            if kind == "finished" and info.get("cause") == "disk_full":
+                # every case after this one would fill the same disk: stop, keep what is finished
+                raise DiskFull(f"the disk is full (case {cid})")
 
         # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C
         old = signal.signal(signal.SIGTERM, _sigterm)
         try:
             with progress:
                 ex.run(tasks, on_event)
+        except DiskFull as exc:
+            report.interrupted, report.stopped = True, exc.reason
+            print(f"campaign {campaign.name}: stopped: {exc.reason}. Running cases were stopped and recorded, "
+                  "finished ones are kept. Free some space and run the same command again.", file=stream, flush=True)
         except (KeyboardInterrupt, Interrupted):
             report.interrupted = True
             print(f"campaign {campaign.name}: interrupted; running cases were stopped and recorded, "
                   "finished ones are kept. Run the same command again to go on.", file=stream, flush=True)
         finally:
             signal.signal(signal.SIGTERM, old)
-            store.reconcile([p.case_id for p in todo], stale_running=True)
+            try:
+                store.reconcile([p.case_id for p in todo], stale_running=True)
+            except sqlite3.OperationalError as exc:
+                print(f"campaign {campaign.name}: the index could not be brought up to date ({exc}); the next "
+                      "command re-reads the folders", file=stream, flush=True)
         for p in todo:
             report.statuses.setdefault(p.case_id, st.folder_status(store.case_folder(p.case_id)))
     return report
@@ -243,6 +268,10 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
 
 def _sigterm(signum, frame):
     raise Interrupted("SIGTERM")
+
+
+class DiskFull(Interrupted):
+    """A case found the disk full: the run stops (the next case would too)."""
 
 
 def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport,

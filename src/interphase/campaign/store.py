@@ -29,6 +29,7 @@ import contextlib
 import json
 import os
 import sqlite3
+import tempfile
 import time
 from pathlib import Path
 
@@ -71,12 +72,19 @@ _HIDDEN = ["params", "summary", "checked"]
 def write_json_atomic(path: Path, data: dict) -> None:
     """Write JSON through a temporary file and os.replace: readers never see half a file."""
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w") as fh:
-        json.dump(data, fh, indent=1, sort_keys=True, default=_json_default, allow_nan=True)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    # a name of its own per writer: two processes may write one file (a worker and the parent
+    # recording its death), and a shared temporary name lets one replace the other's away
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(data, fh, indent=1, sort_keys=True, default=_json_default, allow_nan=True)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def _json_default(o):
@@ -252,12 +260,23 @@ def folder_record(folder: Path) -> dict | None:
         else:
             summ = read_json(folder / SUMMARY_JSON)
             row["summary"] = json.dumps(summ.get("row", summ) if isinstance(summ, dict) else {}, sort_keys=True)
+    elif status == "incomplete":
+        row["cause"] = "killed_hard"
+        row["message"] = (f"started {_when(meta.get('started'))} on {meta.get('host') or '?'}, never finished: its "
+                          "run was killed hard (SIGKILL, power, node lost); `campaign run` runs it again")
     elif status in ("failed", "killed", "interrupted"):
         fail = read_json(folder / FAILURE_JSON) or {}
         row["cause"], row["message"] = fail.get("cause"), fail.get("message")
         row["finished"] = fail.get("finished", row["finished"])
         row["elapsed"] = fail.get("elapsed", row["elapsed"])
     return row
+
+
+def _when(t) -> str:
+    try:
+        return time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(float(t)))
+    except (TypeError, ValueError):
+        return "at an unknown time"
 
 
 def run_identity(meta: dict) -> tuple[str | None, str | None]:
@@ -343,6 +362,18 @@ class CampaignStore:
         finally:
             lk.release()
 
+    def run_active(self) -> bool:
+        """Whether a `campaign run` holds this campaign's lock now (its queued/running rows are real)."""
+        from filelock import FileLock, Timeout
+
+        lk = FileLock(str(self.root / LOCK))
+        try:
+            lk.acquire(timeout=0)
+        except Timeout:
+            return True
+        lk.release()
+        return False
+
     # ---- folders ---------------------------------------------------------------------------
     def case_folder(self, case_id: str) -> Path:
         return self.root / case_id
@@ -384,6 +415,9 @@ class CampaignStore:
             if known and (known[0] == status or (status == "done" and known[0] == "corrupt")) \
                     and (known[0] != "done" or known[1]):
                 continue   # a done folder's verdict is kept up to date by reconcile()
+            if known and known[0] in ("queued", "running") and status in ("pending", "incomplete") \
+                    and self.run_active():
+                continue   # a run at work (`status` while it runs) knows better than the folder
             rec = folder_record(folder) if status != "pending" else None
             if rec is None:
                 rec = {"case_id": p.case_id, "status": status, "attempts": 0, "updated": now}
@@ -466,8 +500,9 @@ class CampaignStore:
         return df.rename(columns={"grp": "group"})
 
     def status(self) -> pd.DataFrame:
-        """One row per indexed case: id, engine, group, label, role, status, cause, message, timings."""
-        self.reconcile()
+        """One row per indexed case: id, engine, group, label, role, status, cause, message, timings.
+        Rows a dead run left queued/running are corrected from their folders."""
+        self.reconcile(stale_running=not self.run_active())
         return self._frame().drop(columns=_HIDDEN)
 
     def summaries(self) -> pd.DataFrame:
