@@ -176,3 +176,39 @@ def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp
     assert np.allclose(iface["efficiency"], iface["peak_stress_ratio"].to_numpy() / box.loc[iface["pair_id"]].to_numpy(),
                        rtol=1e-5)
     assert s.loc[s["test"].eq("box"), "efficiency"].isna().all()
+
+
+def test_the_criterion_is_checked_against_every_case_in_sample_and_group_held_out(synthetic_report):
+    """Synthetic cases follow a known chain (θr(θa, μ) and E(θr) with small noise): predicted δ must
+    sit within a couple of degrees of the measured one in sample and with each group's points left
+    out of the fits; the table says the error distribution and the largest miss; criterion.json is
+    written and reads back as the same chain."""
+    from interphase.analysis.criterion import check_summary, predict
+    from interphase.report.build import load_criterion
+
+    out, res, summ = synthetic_report
+    checks = res.criterion_check
+    assert set(checks["fold"]) == {"in-sample", "group held out"}
+    n_cases = len(res.points)
+    for fold, g in checks.groupby("fold"):
+        assert len(g) == n_cases                              # every case, once per fold
+        s = check_summary(g)
+        assert s["n"] >= 0.5 * n_cases and abs(s["mean"]) < 1.0 and s["max_abs"] < 6.0, (fold, s)
+    assert check_summary(checks[checks["fold"] == "in-sample"])["n"] >= 0.8 * n_cases
+    # Group 2 alone has flat-spaced surfaces: without it there is no Fig. 6.9 fit, and the rows say so
+    g2 = checks[(checks["fold"] == "group held out") & (checks["group"] == "group2") & checks["flat_spaced"]]
+    assert len(g2) and g2["error_deg"].isna().all() and g2["note"].str.contains("6.9").all()
+    held, ins = (check_summary(checks[checks["fold"] == f]) for f in ("group held out", "in-sample"))
+    assert held["sd"] >= 0.9 * ins["sd"]                      # unseen surfaces are not predicted better
+    table = pd.read_csv(out / "tables" / "criterion_check.csv")
+    assert {"error [°]", "δ measured [°]", "δ predicted [°]"} <= set(table.columns)
+    md = (out / "tables" / "criterion_check.md").read_text()
+    assert "largest miss" in md and "group held out" in md
+    assert (out / "figures" / "criterion_check.png").is_file()
+
+    model = load_criterion(out / "criterion.json")
+    row = checks[(checks["fold"] == "in-sample") & checks["error_deg"].notna()].iloc[0]
+    p = predict(model, row["friction_ps"], row["theta_a_deg_92"],
+                float(res.points.set_index("physical_case").loc[row["physical_case"], "theta_a_deg_90"]),
+                bool(row["flat_spaced"]))
+    assert p.efficiency == pytest.approx(row["E_predicted"], rel=1e-6)

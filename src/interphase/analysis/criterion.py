@@ -342,3 +342,47 @@ def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
     flat_spaced, why = regular_flat_spacing(profile.x, profile.z, d50)
     p = predict(model, friction, t[92].theta_a_deg, t[90].theta_a_deg, flat_spaced, filt)
     return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat_spaced, why)
+
+
+def check_cases(model: CriterionModel, points: pd.DataFrame) -> pd.DataFrame:
+    """The chain run on every physical case of a points table (correlations.prepare_points /
+    seed_ensemble) against what the simulation measured: one row per case with the predicted and
+    measured θr [°], E and tan δ, δ [°], and `error_deg` = δ predicted − δ measured (the study's
+    measure of its criterion: < 4° against the lab). The prediction uses the case's own θa (both
+    filters), flat spacing, friction and its box ensemble's tan φ; a case the chain cannot take
+    (θa outside a fit's range, a missing correlation) keeps NaN and the reason in `note`."""
+    rows = []
+    col = lambda r, k: float(r[k]) if k in r and pd.notna(r[k]) else math.nan
+    for _, r in points.iterrows():
+        out = {"group": r.get("group"), "physical_case": r.get("physical_case"), "friction_ps": col(r, "friction_ps"),
+               "theta_a_deg_92": col(r, "theta_a_deg_92"), "flat_spaced": bool(r.get("flat_spaced", False)),
+               "theta_r_measured": col(r, "theta_r_surface_deg"), "E_measured": col(r, "efficiency"),
+               "tan_delta_measured": col(r, "peak_stress_ratio"), "tan_phi": col(r, "tan_phi"), "note": ""}
+        try:
+            p = predict(model, out["friction_ps"], out["theta_a_deg_92"], col(r, "theta_a_deg_90"), out["flat_spaced"])
+            out.update(theta_r_predicted=p.theta_r_deg, E_predicted=p.efficiency, branch=p.branch)
+        except InputError as exc:
+            out.update(theta_r_predicted=math.nan, E_predicted=math.nan, branch="", note=str(exc))
+        out["tan_delta_predicted"] = out["E_predicted"] * out["tan_phi"]
+        rows.append(out)
+    df = pd.DataFrame(rows)
+    if df.empty:
+        return df
+    deg = lambda t: np.degrees(np.arctan(pd.to_numeric(t, errors="coerce")))
+    df["delta_predicted_deg"], df["delta_measured_deg"] = deg(df["tan_delta_predicted"]), deg(df["tan_delta_measured"])
+    df["error_deg"] = df["delta_predicted_deg"] - df["delta_measured_deg"]
+    return df
+
+
+def check_summary(df: pd.DataFrame) -> dict:
+    """n, mean, sd, 5–95 % range and the largest |error| [° of δ] (with its case) of check_cases."""
+    e = pd.to_numeric(df.get("error_deg", pd.Series(dtype=float)), errors="coerce")
+    ok = e.dropna()
+    if ok.empty:
+        return {"n": 0, "n_without": int(len(e))}
+    worst = ok.abs().idxmax()
+    return {"n": int(len(ok)), "n_without": int(len(e) - len(ok)), "mean": float(ok.mean()),
+            "sd": float(ok.std(ddof=1)) if len(ok) > 1 else math.nan,
+            "p5": float(ok.quantile(0.05)), "p95": float(ok.quantile(0.95)), "max_abs": float(ok.abs().max()),
+            "worst_case": str(df.loc[worst, "physical_case"]), "worst_group": str(df.loc[worst, "group"]),
+            "within_4deg": float((ok.abs() < 4.0).mean())}

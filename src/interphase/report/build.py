@@ -27,7 +27,7 @@ import pandas as pd
 
 from interphase import __version__
 from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
-from interphase.analysis.criterion import CriterionModel
+from interphase.analysis.criterion import CriterionModel, check_cases, check_summary
 from interphase.errors import InputError
 from interphase.report import figures as F
 from interphase.report import tables as T
@@ -47,6 +47,7 @@ class ReportResult:
     ensembles: pd.DataFrame | None = None     # one row per physical case (report.ensembles)
     runs: pd.DataFrame | None = None          # one row per run (prepare_points), for the force networks
     ensemble: SeedEnsemble | None = None
+    criterion_check: pd.DataFrame | None = None   # criterion_checks: the chain against every case
 
 
 def ensemble_points(summaries: pd.DataFrame, store=None, *, seed: int = 0,
@@ -60,6 +61,48 @@ def ensemble_points(summaries: pd.DataFrame, store=None, *, seed: int = 0,
 
         table, states = ensemble_tables(summaries, store, e_note=e_note)
     return seed_ensemble(runs, states, table, seed=seed), table
+
+
+CHECK_COLUMNS = {"fold": "fold", "group": "group", "physical_case": "case", "friction_ps": "μs",
+                 "theta_a_deg_92": "θa (> 92°) [°]", "branch": "branch", "theta_r_measured": "θr measured [°]",
+                 "theta_r_predicted": "θr predicted [°]", "E_measured": "E measured", "E_predicted": "E predicted",
+                 "tan_phi": "tan φ", "delta_measured_deg": "δ measured [°]", "delta_predicted_deg": "δ predicted [°]",
+                 "error_deg": "error [°]", "note": "note"}
+
+
+def criterion_checks(chain: CriterionModel, points: pd.DataFrame) -> pd.DataFrame | None:
+    """check_cases with the campaign's own fits (fold 'in-sample') and, when there are at least two
+    groups, with fits made WITHOUT each group on that group (fold 'group held out': the criterion
+    predicting surfaces it has not seen, as a user's new surface). None without θa–θr and E–θr fits."""
+    from interphase.analysis.correlations import fit_study
+
+    if not chain.theta_r or chain.efficiency is None or points.empty:
+        return None
+    folds = [check_cases(chain, points).assign(fold="in-sample")]
+    groups = points["group"].astype(str)
+    if groups.nunique() >= 2:
+        keys = [SPECS[k] for k in ("fig6_8", "fig6_9", "fig6_10a")]
+        for g in sorted(groups.unique()):
+            rest = points[groups != g]
+            model = criterion_from_fits(fit_study(rest, keys, n_boot=0), rest, f"without {g}")
+            folds.append(check_cases(model, points[groups == g]).assign(fold="group held out"))
+    return pd.concat(folds, ignore_index=True)
+
+
+def check_notes(checks: pd.DataFrame) -> list[str]:
+    """One line per fold: the error distribution in degrees of δ and the largest miss."""
+    notes = ["error = δ predicted − δ measured [°], δ = atan(tan δ) at the peak, seed means; predicted tan δ = "
+             "E(θr(θa)) × the case's own tan φ. The study: < 4° against the lab."]
+    for fold, g in checks.groupby("fold", sort=False):
+        s = check_summary(g)
+        if not s["n"]:
+            notes.append(f"{fold}: no case the chain could take ({s['n_without']} without)")
+            continue
+        notes.append(f"{fold}: {s['n']} cases, error {s['mean']:+.2f}° ± {s['sd']:.2f}° (mean ± sd), 5–95 % "
+                     f"{s['p5']:+.2f}° to {s['p95']:+.2f}°, {100 * s['within_4deg']:.0f} % within 4°, largest miss "
+                     f"{s['max_abs']:.2f}° ({s['worst_case']}, {s['worst_group']})"
+                     + (f"; {s['n_without']} case(s) outside the chain's reach" if s["n_without"] else ""))
+    return notes
 
 
 def write_criterion(model: CriterionModel, points: pd.DataFrame, path: Path, prov: str) -> Path:
@@ -236,6 +279,12 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
             res.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
                                 "column of the ensembles table and docs/strength.md")
     tables.append(T.coefficient_table(fits))
+    checks = criterion_checks(chain, points)
+    if checks is not None:
+        res.criterion_check = checks
+        shown = checks[list(CHECK_COLUMNS)].rename(columns=CHECK_COLUMNS)
+        tables.append(T.Table("criterion_check", "The criterion θa → θr → E against every simulated case",
+                              shown, check_notes(checks)))
     if lab_df is not None:
         from interphase.report.lab import compare
 
@@ -275,6 +324,8 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
                                                                                "Fig. 6.9: flat-spaced surfaces"))
     add("Fig. 6.10a: efficiency vs θr", F.correlation_figure(points, fits, ["fig6_10a"], "fig6_10a", fdir,
                                                              "Fig. 6.10a: failure criterion E(θr)"))
+    if checks is not None:
+        add("The criterion against every simulated case: δ predicted vs measured", F.criterion_check_figure(checks, fdir))
     if lab_df is not None:
         tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").median()
         tp = float(tp) if math.isfinite(tp) else CriterionModel.study_defaults(0.0).tan_phi

@@ -272,3 +272,29 @@ def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[
     _legend(fig, ax, points)
     fig.tight_layout(rect=(0, 0.1, 1, 1))
     return save(fig, folder, "fig6_10b_lab")
+
+
+def criterion_check_figure(checks: pd.DataFrame, folder: Path) -> list[Path]:
+    """δ predicted by the chain against δ measured (seed means), one panel per fold, with the 1:1
+    line and the study's ±4° band."""
+    folds = list(dict.fromkeys(checks["fold"]))
+    fig, axes = plt.subplots(1, len(folds), figsize=(5.2 * len(folds), 4.8), squeeze=False)
+    vals = pd.concat([checks["delta_measured_deg"], checks["delta_predicted_deg"]]).dropna()
+    lo, hi = (float(vals.min()) - 2, float(vals.max()) + 2) if len(vals) else (0.0, 40.0)
+    groups = sorted(checks["group"].astype(str).unique())
+    colours = {g: plt.cm.tab10(i % 10) for i, g in enumerate(groups)}
+    for ax, fold in zip(axes[0], folds):
+        g = checks[checks["fold"] == fold]
+        ax.fill_between([lo, hi], [lo - 4, hi - 4], [lo + 4, hi + 4], color="0.9", label="±4° (the study's criterion)")
+        ax.plot([lo, hi], [lo, hi], color="0.4", lw=1)
+        for grp, gg in g.groupby(g["group"].astype(str)):
+            ax.scatter(gg["delta_measured_deg"], gg["delta_predicted_deg"], s=22, color=colours[grp], label=grp,
+                       edgecolor="k", linewidth=0.4)
+        n = int(g["error_deg"].notna().sum())
+        ax.set(xlim=(lo, hi), ylim=(lo, hi), xlabel="δ measured [°] (seed mean)", ylabel="δ predicted [°]",
+               title=f"{fold} ({n} cases)")
+        ax.set_aspect("equal")
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle("The criterion θa → θr → E against every simulated case")
+    fig.tight_layout()
+    return save(fig, folder, "criterion_check")
