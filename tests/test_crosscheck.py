@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from interphase.analysis.difference import difference
-from interphase.campaign.crosscheck import (ENGINES, METRICS, CrosscheckReport, compare, crosscheck, physical_case,
-                                          split_crosscheck)
+from interphase.campaign.crosscheck import (DEFAULT_TOLERANCES, ENGINES, METRICS, CrosscheckReport, compare, crosscheck,
+                                          physical_case, split_crosscheck)
 from interphase.cli import main
 from interphase.errors import InputError
 from tests.conftest import need_binary
@@ -52,14 +52,17 @@ angle_deg = 3.0
 def test_crosscheck_table_is_blanked_keeping_line_numbers():
     text = "[campaign]\nname = 'a'\n[crosscheck]\nangle_deg = 2.5\n[case]\nd50 = 0.0007\n"
     stripped, tol = split_crosscheck(text, "x.toml")
-    assert tol == {"stress_ratio_rel": 0.10, "angle_deg": 2.5}
+    assert tol == {"critical_ratio_abs": 0.03, "angle_deg": 2.5, "overlap_rel": 0.10}
     assert len(stripped.splitlines()) == len(text.splitlines())
     assert "crosscheck" not in stripped and stripped.splitlines()[5] == "d50 = 0.0007"
 
 
 def test_no_crosscheck_table_gives_the_defaults():
     text = "[campaign]\nname = 'a'\n"
-    assert split_crosscheck(text, "x.toml") == (text, {"stress_ratio_rel": 0.10, "angle_deg": 3.0})
+    assert split_crosscheck(text, "x.toml") == (text, {"critical_ratio_abs": 0.03, "angle_deg": 3.0, "overlap_rel": 0.10})
+    # the peak's and the peak snapshot's tolerances are optional: set, they are added
+    _, tol = split_crosscheck(text + "[crosscheck]\nstress_ratio_rel = 0.1\npeak_angle_deg = 4\n", "x.toml")
+    assert tol == DEFAULT_TOLERANCES | {"stress_ratio_rel": 0.1, "peak_angle_deg": 4.0}
 
 
 @pytest.mark.parametrize("body, line, words", [
@@ -132,9 +135,9 @@ def test_undecided_says_how_many_seeds_would_decide():
 
 
 def test_angles_are_judged_against_an_absolute_tolerance():
-    r = _row(_runs([30.0, 32.0, 31.0], [30.5, 32.4, 31.2], key="theta_r_surface_deg"), "theta_r_surface_deg")
+    r = _row(_runs([30.0, 32.0, 31.0], [30.5, 32.4, 31.2], key="theta_r_surface_mean_deg"), "theta_r_surface_mean_deg")
     assert r.tolerance == 3.0 and r.tolerance_rule == "absolute" and r.verdict == "agree"
-    r = _row(_runs([30.0, 32.0, 31.0], [36.0, 38.5, 37.0], key="theta_r_surface_deg"), "theta_r_surface_deg")
+    r = _row(_runs([30.0, 32.0, 31.0], [36.0, 38.5, 37.0], key="theta_r_surface_mean_deg"), "theta_r_surface_mean_deg")
     assert r.verdict == "differ"
 
 
@@ -166,10 +169,30 @@ def test_reported_metrics_and_undefined_ones_carry_no_verdict():
     assert list(judged.metric) == ["peak_stress_ratio"] and judged.iloc[0].physical == "box (b)"
 
 
+def test_default_tolerances_judge_time_averages_and_report_the_peak():
+    """Without stress_ratio_rel / peak_angle_deg the peak and the peak snapshot's angles are reported
+    (difference and interval, no verdict); the critical-state ratio is judged against an absolute
+    tolerance, the mean overlap against a relative one."""
+    s = {f"c-s{k}": {"liggghts": {"peak_stress_ratio": p, "residual_stress_ratio": 0.30 + 0.01 * k,
+                                  "overlap_mean_d50": 0.0150 + 0.0002 * k, "theta_r_surface_deg": 20.0},
+                     "yade": {"peak_stress_ratio": p + 0.1, "residual_stress_ratio": 0.305 + 0.01 * k,
+                              "overlap_mean_d50": 0.0151 + 0.0002 * k, "theta_r_surface_deg": 30.0}}
+         for k, p in ((1, 0.40), (2, 0.45), (3, 0.50))}
+    t = compare(s, {}, DEFAULT_TOLERANCES).set_index(["level", "metric"]).loc["ensemble"]
+    assert pd.isna(t.loc["peak_stress_ratio", "verdict"]) and t.loc["peak_stress_ratio", "diff"] == pytest.approx(0.1)
+    assert pd.isna(t.loc["theta_r_surface_deg", "verdict"])
+    r = t.loc["residual_stress_ratio"]
+    assert r.tolerance == 0.03 and r.tolerance_rule == "absolute" and r.verdict == "agree"
+    o = t.loc["overlap_mean_d50"]
+    assert o.tolerance == pytest.approx(0.10 * 0.5 * (0.0154 + 0.0155)) and o.verdict == "agree"
+    md = CrosscheckReport("x", Path("/tmp/x"), DEFAULT_TOLERANCES, compare(s, {}, DEFAULT_TOLERANCES)).markdown()
+    assert "| c | peak_stress_ratio | 3 |" in md and "| reported |" in md
+
+
 def test_a_theta_only_one_engine_gives_is_undecided():
-    s = {"c-s1": {"liggghts": {"theta_r_surface_deg": 30.0}, "yade": {"theta_r_surface_deg": None}},
-         "c-s2": {"liggghts": {"theta_r_surface_deg": 31.0}, "yade": {}}}
-    r = _row(s, "theta_r_surface_deg")
+    s = {"c-s1": {"liggghts": {"theta_r_surface_mean_deg": 30.0}, "yade": {"theta_r_surface_mean_deg": None}},
+         "c-s2": {"liggghts": {"theta_r_surface_mean_deg": 31.0}, "yade": {}}}
+    r = _row(s, "theta_r_surface_mean_deg")
     assert r.seeds == 0 and r.verdict == "undecided" and r.liggghts == pytest.approx(30.5)
 
 
@@ -235,7 +258,9 @@ def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
     assert r.seeds == 2 and r.liggghts == pytest.approx(0.2, abs=0.01) and r.yade == pytest.approx(0.2, abs=0.01)
     assert r.verdict == "agree" and -r.tolerance <= r.diff_lo <= r.diff_hi <= r.tolerance
     assert pd.isna(e.loc["shear_disp_at_peak", "verdict"])                      # reported only
-    assert set(report.judged.metric) == {m for m, _, kind, _ in METRICS if kind}
+    assert set(report.judged.metric) == {m for m, _, _, key in METRICS if key in report.tolerances}
+    assert {"residual_stress_ratio", "theta_r_surface_mean_deg", "overlap_mean_d50", "peak_stress_ratio"} \
+        <= set(report.judged.metric)
     assert (out / "crosscheck.csv").exists() and "| peak_stress_ratio | 2 |" in (out / "crosscheck.md").read_text()
     # the CLI reuses the finished cases (no rerun) and prints JSON; exit 0 only if everything agrees
     capsys.readouterr()

@@ -11,22 +11,27 @@ tolerances, which `campaign run` never sees (its lines are blanked before the sc
 so every other line keeps its number in error messages):
 
     [crosscheck]
-    stress_ratio_rel = 0.10    # peak stress ratio (tan δ; box tests tan φ): × the mean of the two engines
-    angle_deg = 3.0            # θr, θn at the surface (ψ, degrees from vertical): absolute
+    critical_ratio_abs = 0.03  # critical-state stress ratio (residual_stress_ratio): absolute
+    angle_deg = 3.0            # θr over the loaded snapshots (ψ, degrees from vertical): absolute
+    overlap_rel = 0.10         # mean contact overlap: × the mean of the two engines
+    stress_ratio_rel = 0.10    # optional: judge the peak stress ratio too (else reported only)
+    peak_angle_deg = 3.0       # optional: judge θr, θn at the peak snapshot too (else reported only)
 
 The verdict. A physical case is a case label without its `-s<seed>` suffix; its seeds are the
 packings both engines finished. Per metric, the PAIRED difference YADE − LIGGGHTS (same packing seed)
 is averaged over those seeds with its 95 % t interval, and the interval is set against ±tolerance
 (interphase.analysis.difference, paired=True): agree (inside), differ (entirely outside), undecided
 (straddles, or fewer than 2 seeds; `seeds_needed` is the seed count whose interval would decide at
-the scatter of the differences seen). stress_ratio_rel becomes an absolute tolerance per physical
+the scatter of the differences seen). A relative tolerance becomes an absolute one per physical
 case: rel × ½(|mean LIGGGHTS| + |mean YADE|). Single seeds are rows of information, never a verdict.
 
-Metrics (from each case's summary.json, interphase.analysis.summary row keys): peak_stress_ratio,
-theta_r_surface_deg (at the peak snapshot), theta_r_surface_mean_deg (over the loaded snapshots),
-theta_n_surface_deg [deg, ψ] are judged; shear_disp_at_peak [m] and dilation_at_peak [m] are reported
-with their paired differences only. A metric neither engine defines for a case (θ of a box test) is
-left out of the verdict.
+Metrics (from each case's summary.json, interphase.analysis.summary row keys). Judged by default — time
+averages, whose paired scatter at a few hundred grains is small enough to decide (docs/crosscheck.md):
+residual_stress_ratio (mean over the last 20 % of the shear), theta_r_surface_mean_deg,
+overlap_mean_d50 [D50]. Reported only unless their optional tolerance is set: peak_stress_ratio (one
+stick–slip event at this size), theta_r_surface_deg and theta_n_surface_deg (one snapshot), and
+always shear_disp_at_peak [m], dilation_at_peak [m]. A metric neither engine defines for a case (θ of
+a box test) is left out of the verdict.
 Runs go through interphase.campaign.run.run_campaign, so finished cases (DONE) are reused.
 """
 
@@ -47,14 +52,22 @@ from interphase.analysis.difference import VERDICTS, difference
 from interphase.errors import InputError
 
 ENGINES = ("liggghts", "yade")
-DEFAULT_TOLERANCES = {"stress_ratio_rel": 0.10, "angle_deg": 3.0}
-#: (row key, unit, how compared: "rel" | "abs" | None, tolerance key)
+#: tolerances that judge by default: time averages, whose paired scatter is small (docs/crosscheck.md)
+DEFAULT_TOLERANCES = {"critical_ratio_abs": 0.03, "angle_deg": 3.0, "overlap_rel": 0.10}
+#: tolerances that judge only when a [crosscheck] table sets them: single-snapshot / peak values, whose
+#: seed scatter is that of one stick–slip event (without them these metrics are reported only)
+OPTIONAL_TOLERANCES = ("stress_ratio_rel", "peak_angle_deg")
+TOLERANCE_KEYS = (*DEFAULT_TOLERANCES, *OPTIONAL_TOLERANCES)
+#: (row key, unit, how compared: "rel" | "abs" | None, tolerance key); a metric whose tolerance key is
+#: not among the tolerances in force is reported (difference and interval), not judged
 METRICS = (
-    ("peak_stress_ratio", "-", "rel", "stress_ratio_rel"),
-    ("shear_disp_at_peak", "m", None, None),
-    ("theta_r_surface_deg", "deg", "abs", "angle_deg"),
+    ("residual_stress_ratio", "-", "abs", "critical_ratio_abs"),
     ("theta_r_surface_mean_deg", "deg", "abs", "angle_deg"),
-    ("theta_n_surface_deg", "deg", "abs", "angle_deg"),
+    ("overlap_mean_d50", "D50", "rel", "overlap_rel"),
+    ("peak_stress_ratio", "-", "rel", "stress_ratio_rel"),
+    ("theta_r_surface_deg", "deg", "abs", "peak_angle_deg"),
+    ("theta_n_surface_deg", "deg", "abs", "peak_angle_deg"),
+    ("shear_disp_at_peak", "m", None, None),
     ("dilation_at_peak", "m", None, None),
 )
 _HEADER = re.compile(r"^\s*\[")
@@ -76,12 +89,12 @@ def split_crosscheck(text: str, where: str) -> tuple[str, dict]:
     for key, value in table.items():
         line = next((start + 1 + k for k, ln in enumerate(lines[start:end]) if re.match(rf"^\s*{re.escape(key)}\s*=", ln)),
                     start + 1)
-        if key not in DEFAULT_TOLERANCES:
+        if key not in TOLERANCE_KEYS:
             raise InputError(f"unknown key {key!r} in [crosscheck]", where=f"{where}:{line}",
-                             fix=f"allowed keys: {', '.join(DEFAULT_TOLERANCES)}")
+                             fix=f"allowed keys: {', '.join(TOLERANCE_KEYS)}")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
             raise InputError(f"[crosscheck].{key} must be a positive number, got {value!r}", where=f"{where}:{line}",
-                             fix="e.g. stress_ratio_rel = 0.10 (10 %), angle_deg = 3.0")
+                             fix="e.g. critical_ratio_abs = 0.03, angle_deg = 3.0, overlap_rel = 0.10")
         tolerances[key] = float(value)
     blanked = lines[:start] + ["#\n"] * (end - start) + lines[end:]
     return "".join(blanked), tolerances
@@ -204,7 +217,7 @@ def _fmt_ci(d, lo, hi) -> str:
 
 def _fmt_tol(r) -> str:
     if not _finite(r.tolerance):
-        return "reported" if r.kind is None or (isinstance(r.kind, float) and math.isnan(r.kind)) else "—"
+        return "reported" if not isinstance(r.verdict, str) else "—"
     return f"±{r.tolerance:.3g} ({r.tolerance_rule})"
 
 
