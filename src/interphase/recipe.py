@@ -28,7 +28,7 @@ FILE = "recipe.json"
 #: that alters its rendered input files or the driver's behaviour: tests/test_recipe_version.py renders
 #: reference cases of both engines and fails, naming the files and the engine, until the number is
 #: bumped and the reference hashes (tests/data/recipe_renders.json) are written again.
-RECIPE_VERSIONS = {"liggghts": 1, "yade": 1}
+RECIPE_VERSIONS = {"liggghts": 1, "yade": 2}
 
 
 @dataclass(frozen=True)

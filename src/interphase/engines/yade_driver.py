@@ -27,6 +27,12 @@ history rows every n_history and snapshots every n_snapshot steps from the shear
 centres leave [x_lo, x_hi] × [z_lo, z_hi] are lost ('ERROR: Lost atoms', exit 3); grains past an exit
 plane (interface) are erased and counted. Output in the case folder (read by io/yade.py):
 history.csv, contacts.csv, particles.csv, bodies.json, shear_start.txt, rolling.json.
+
+Cost (BENCHMARKS.md, issue 16): the PyRunner runs every step, so the per-step work is kept to the
+servo (one C++ force sum, velocities set on State handles held from the start) and the rolling
+update every ROLLING_PERIOD steps; the history rows read the surface's contacts from its facets
+(not every grain's) and count contacts in C++. None of this changes what YADE computes: the run is
+bit-identical to the first driver's (history, contacts, particles: four cases, walled and periodic).
 """
 
 from __future__ import annotations
@@ -146,6 +152,13 @@ class Driver:
         self.surface_set = set(self.surface_ids)
         self.wall_ids = [i for ids in self.groups for i in ids]
         self.wall_set = set(self.wall_ids)
+        # Python handles on the bodies' states (O.bodies[i].state looks the body up on every call, 3-4x
+        # slower) and the grains' radii, as YADE holds them
+        self.states = {i: O.bodies[i].state for i in self.grain_ids + self.wall_ids}
+        self.radius = {i: O.bodies[i].shape.radius for i in self.grain_ids}
+        self.platen_states = [self.states[i] for i in self.platen_ids]
+        self.sum_forces = y.utils.sumForces            # C++ sum of a group's forces along an axis
+        self.axes = (y.Vector3(1, 0, 0), y.Vector3(0, 0, 1))
         with open("bodies.json", "w") as fh:
             json.dump({"n_grains": self.n_grains, "first_grain": self.grain_ids[0],
                        "walls": [[min(ids), max(ids)] for ids in self.groups]}, fh)
@@ -172,7 +185,7 @@ class Driver:
         self.kr_wall, self.mu_r = M["krot_wall"], M["mu_r"]
         self.removed = 0
         self.start = None            # the step the shear starts at
-        self.t_shear = None
+        self.t_shear = self.c_shear = None
         self.hist = open("history.csv", "w")
         self.hist.write(HISTORY_HEADER)
         self.cont = open("contacts.csv", "w")
@@ -189,12 +202,9 @@ class Driver:
 
     # ---- measurements
     def group_force(self, ids) -> tuple[float, float]:
-        fx = fz = 0.0
-        for i in ids:
-            f = self.O.forces.f(i)
-            fx += f[0]
-            fz += f[2]
-        return fx, fz
+        """(fx, fz) summed over the bodies `ids`, in their order (utils.sumForces: 0 + f·e per body,
+        the same numbers as summing f[0], f[2] in Python, without a Python call per body)."""
+        return self.sum_forces(ids, self.axes[0]), self.sum_forces(ids, self.axes[1])
 
     def window_force(self) -> tuple[float, float]:
         """Force ON the surface from the grains whose centres lie in the measuring window (None:
@@ -202,16 +212,22 @@ class Driver:
         W = self.P["window"]
         if W is None or self.period:
             return self.group_force(self.loaded_ids)
+        # the surface facets' contacts (a few per facet), not every grain's; summed in the order of
+        # (grain id, facet id), the order of a loop over the grains and each grain's intrs(), which
+        # YADE keeps sorted by the other body's id
+        states, bodies, hits = self.states, self.O.bodies, []
+        for s in self.surface_ids:
+            for inter in bodies[s].intrs():
+                if inter.isReal and inter.id1 == s:
+                    p = states[inter.id2].pos
+                    if in_window(p[0], p[2], W):
+                        hits.append((inter.id2, s, inter.phys))
+        hits.sort(key=lambda h: (h[0], h[1]))
         fx = fz = 0.0
-        for i in self.grain_ids:
-            p = self.O.bodies[i].state.pos
-            if not in_window(p[0], p[2], W):
-                continue
-            for inter in self.O.bodies[i].intrs():
-                if inter.isReal and inter.id1 in self.surface_set:
-                    f = inter.phys.normalForce + inter.phys.shearForce      # force on the grain
-                    fx -= f[0]
-                    fz -= f[2]
+        for _, _, ph in hits:
+            f = ph.normalForce + ph.shearForce      # force on the grain
+            fx -= f[0]
+            fz -= f[2]
         return fx, fz
 
     def remove_escaped(self) -> None:
@@ -220,9 +236,11 @@ class Driver:
         exits = self.P["exits"]
         if exits is None:
             return
-        for i in [i for i in self.grain_ids if not exits[0] <= self.O.bodies[i].state.pos[0] <= exits[1]]:
+        lo, hi, states = exits[0], exits[1], self.states
+        for i in [i for i in self.grain_ids if not lo <= states[i].pos[0] <= hi]:
             self.O.bodies.erase(i)
             self.grain_ids.remove(i)
+            del self.states[i]
             self.removed += 1
 
     def fail_if_lost(self, it: int) -> None:
@@ -236,23 +254,23 @@ class Driver:
             os._exit(3)              # sys.exit would only end the PyRunner call
 
     def _xz(self, i) -> tuple[float, float]:
-        p = self.O.bodies[i].state.pos
+        p = self.states[i].pos
         return p[0], p[2]
 
     def write_snapshot(self, it: int) -> None:
-        O = self.O
+        states = self.states
         rows = []
-        for inter in O.interactions:
+        for inter in self.O.interactions:
             if not inter.isReal:
                 continue
             g, ph = inter.geom, inter.phys
             rows.append(contact_row(it, inter.id1, inter.id2, self.at(g.contactPoint), g.normal,
                                     ph.normalForce + ph.shearForce,    # on body 2 (YADE: id1 → id2 normal)
-                                    g.penetrationDepth, self.at(O.bodies[inter.id1].state.pos),
-                                    self.at(O.bodies[inter.id2].state.pos)))
+                                    g.penetrationDepth, self.at(states[inter.id1].pos),
+                                    self.at(states[inter.id2].pos)))
         self.cont.write("".join(rows))
-        self.part.write("".join(particle_row(it, i, self.at(O.bodies[i].state.pos), O.bodies[i].state.vel,
-                                             O.bodies[i].shape.radius) for i in self.grain_ids))
+        self.part.write("".join(particle_row(it, i, self.at(states[i].pos), states[i].vel, self.radius[i])
+                                for i in self.grain_ids))
 
     def at(self, p) -> tuple[float, float, float]:
         """A point as written: x wrapped into [0, period) in the periodic device."""
@@ -260,20 +278,25 @@ class Driver:
 
     # ---- grain–facet rolling: epsd2's wall values (the Ip2 functor's single krot/eta fit grain pairs)
     def grain_radius(self, inter) -> float:
-        return self.O.bodies[inter.id2 if inter.id1 in self.wall_set else inter.id1].shape.radius
+        return self.radius[inter.id2 if inter.id1 in self.wall_set else inter.id1]
 
     def set_wall_rolling(self) -> None:
         """Rolling stiffness and cap of grain–facet contacts as LIGGGHTS epsd2 has them (kr = kt·r²,
-        cap μr·r·Fn)."""
+        cap μr·r·Fn). Every ROLLING_PERIOD steps: a facet contact younger than that keeps the
+        functor's (grain-pair) values until the next update."""
+        kr, mu_r, radius, bodies = self.kr_wall, self.mu_r, self.radius, self.O.bodies
         for f in self.wall_ids:
-            for inter in self.O.bodies[f].intrs():
-                if inter.isReal and inter.phys.kr != self.kr_wall:
-                    inter.phys.kr = self.kr_wall
-                    inter.phys.maxBendPl = self.mu_r * self.grain_radius(inter)
+            for inter in bodies[f].intrs():
+                if inter.isReal:
+                    ph = inter.phys
+                    if ph.kr != kr:
+                        ph.kr = kr
+                        ph.maxBendPl = mu_r * radius[inter.id2 if inter.id1 == f else inter.id1]
 
     def set_velocity(self, ids, v) -> None:
+        states = self.states
         for i in ids:
-            self.O.bodies[i].state.vel = v
+            states[i].vel = v
 
     # ---- the time step
     def step(self) -> None:
@@ -281,9 +304,10 @@ class Driver:
         it = O.iter
         if self.kr_wall > 0 and it % ROLLING_PERIOD == 0:
             self.set_wall_rolling()
-        fz_platen = self.group_force(self.platen_ids)[1]          # grains push the platen up: +z
-        self.set_velocity(self.platen_ids, y.Vector3(0, 0, servo_velocity(P["platen_force"], fz_platen,
-                                                                         P["servo_vmax"], P["servo_band"])))
+        fz_platen = self.sum_forces(self.platen_ids, self.axes[1])   # grains push the platen up: +z
+        v = y.Vector3(0, 0, servo_velocity(P["platen_force"], fz_platen, P["servo_vmax"], P["servo_band"]))
+        for s in self.platen_states:
+            s.vel = v
         if self.start is None:
             done = chunks_done(it, S)
             if done is None:
@@ -300,12 +324,12 @@ class Driver:
             with open("shear_start.txt", "w") as fh:
                 fh.write("%d\n" % it)
             self.set_velocity(self.loaded_ids, y.Vector3(-P["shear_velocity"], 0, 0))
-            self.t_shear = time.time()
+            self.t_shear, self.c_shear = time.time(), time.process_time()
         s0 = self.start
         if (it - s0) % S["n_history"] == 0:
             surface = self.group_force(self.loaded_ids)
             pz = O.bodies[self.platen_ids[0]].state.pos[2] + self.platen_dz
-            nc = sum(1 for inter in O.interactions if inter.isReal)
+            nc = O.interactions.countReal()
             self.remove_escaped()
             self.hist.write(history_row(it, surface, fz_platen, pz, nc, self.window_force(), len(self.grain_ids),
                                         self.removed))
@@ -315,7 +339,7 @@ class Driver:
         if it - s0 >= S["n_shear"]:
             O.pause()                # the last shear step: the run ends after it
 
-    def finish(self, t0: float) -> None:
+    def finish(self, t0: float, c0: float = 0.0) -> None:
         """Close the output, record the rolling parameters in force and the stage wall times."""
         for fh in (self.hist, self.cont, self.part):
             fh.close()
@@ -327,10 +351,12 @@ class Driver:
                        "matched": sum(1 for inter in facet if inter.phys.kr == self.kr_wall
                                       and abs(inter.phys.maxBendPl - self.mu_r * self.grain_radius(inter))
                                       <= 1e-12 * self.grain_radius(inter))}, fh)
-        end = time.time()
-        # wall times of the two stages, for bench/bench_yade.py (particle-steps per second)
-        print("interphase: consolidation %d steps %.3f s; shear %d steps %.3f s; grains %d" % (
-            self.start, self.t_shear - t0, self.S["n_shear"] + 1, end - self.t_shear, self.n_grains))
+        end, cend = time.time(), time.process_time()
+        # wall times of the two stages, for bench/bench_yade.py (particle-steps per second), and this
+        # process's CPU times (steadier than wall times on a shared machine)
+        print("interphase: consolidation %d steps %.3f s; shear %d steps %.3f s; grains %d; cpu %.3f s, %.3f s" % (
+            self.start, self.t_shear - t0, self.S["n_shear"] + 1, end - self.t_shear, self.n_grains,
+            self.c_shear - c0, cend - self.c_shear))
         print("interphase: finished %d steps" % self.O.iter)
         sys.stdout.flush()
 
@@ -345,7 +371,7 @@ def main(params_path: str = "params.json") -> None:
         P = json.load(fh)
     driver = Driver(P, yade)
     __main__.interphase_step = driver.step      # PyRunner commands run in __main__'s namespace
-    t0 = time.time()
+    t0, c0 = time.time(), time.process_time()
     S = P["steps"]
     yade.O.run(S["n_consolidate"] + S["n_chunks_max"] * S["n_chunk"] + S["n_shear"] + 1, True)
-    driver.finish(t0)
+    driver.finish(t0, c0)
