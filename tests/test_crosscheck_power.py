@@ -194,3 +194,103 @@ def test_friction_mismapping_is_detected_as_differ(tmp_path, use_yade):
     assert not report.passed
     seeds = report.seeds[report.seeds.metric == "peak_stress_ratio"]
     assert len(seeds) == 3 and seeds.verdict.isna().all()      # per-seed rows: information, no verdict
+
+
+# ---- the power of the standard set's judged metrics, tiny (issue 16 item 3) ------------------------
+# The standard set (campaigns/crosscheck.toml) judges time averages: the critical-state stress ratio
+# (residual_stress_ratio), θr over the loaded snapshots and the mean contact overlap. Each deliberate
+# mis-mapping must come out DIFFER on the metric it moves while the true mapping AGREES, on the same
+# LIGGGHTS runs. Tiny periodic cells (12 × 8 D50, ~100 well-graded grains, 1 mm at 0.05 m/s):
+# - flat μs = 0.2 (every bottom grain slides: the ratio is μs in both engines, scatter ~0): the true
+#   mapping agrees on the critical ratio; friction × 1.3 moves it to 0.26 (differ); stiffness × 4
+#   moves the mean overlap by 4^(-2/3) = 0.40× (Hertz), far outside ±10 % (differ).
+# - rolling resistance off: measured at 250 grains (docs/crosscheck.md, power table).
+# Why not friction on the flat at μs = 0.5: there the grains roll over the surface (ratio 0.31, well
+# below μs) and μs does not hold the load — LIGGGHTS with μs 0.65 gave the same critical ratio and θr
+# (0.31, 15.0° vs 0.31, 15.1°, seeds 1–3, 250 grains): no metric of that case can see friction × 1.3.
+
+TINY_PERIODIC = """\
+[campaign]
+name = "xc-power-tiny"
+engines = ["liggghts", "yade"]
+
+[execution]
+executor = "local"
+jobs = 2
+
+[case]
+test = "interface"
+device = "periodic"
+profile = {kind = "flat"}
+gradation = "poly"
+d50 = 0.0007
+shear_modulus = 50e6
+friction_ps = 0.2
+rolling_friction = 0.1
+restitution = 0.5
+shear_velocity = 0.05
+shear_distance = 0.001
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 8.0
+
+[sweep]
+seed = [1, 2, 3]
+
+[pairs]
+box = false
+
+[crosscheck]
+critical_ratio_abs = 0.03
+angle_deg = 3.0
+overlap_rel = 0.10
+"""
+
+
+def _copy_done(src, dst, engine: str = "liggghts") -> None:
+    """Finished case folders of `engine` from src into dst (a variant's output reuses them)."""
+    import shutil
+
+    dst.mkdir(parents=True, exist_ok=True)
+    for folder in src.iterdir():
+        case = folder / "case.json"
+        if (folder / "DONE").exists() and case.exists() and json.loads(case.read_text())["engine"] == engine:
+            shutil.copytree(folder, dst / folder.name, dirs_exist_ok=True)
+
+
+@pytest.mark.liggghts
+@pytest.mark.yade
+def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tmp_path, use_yade):
+    """The true mapping, friction × 1.3 and stiffness × 4 on the same three LIGGGHTS runs of a tiny
+    periodic flat at μs = 0.2: friction → the critical-state ratio DIFFERS; stiffness → the mean
+    overlap DIFFERS; the true mapping → the critical ratio AGREES and the overlap does not differ.
+    Measured 2026-11-23 (8 min 1 s on the 2-core machine with ~8 other engine processes running;
+    ~12 runs of ~100 grains): true: ratio 0.1943 vs 0.1998, +0.0055 [−0.0099, +0.0209] → agree,
+    overlap −5.6e-05 [−0.00168, +0.00157] against ±0.00144 → undecided (3 seeds of ~100 grains; the
+    standard set's 250-grain cell decides it: agree at 5 seeds, docs/crosscheck.md); friction: ratio
+    0.2527, +0.0584 [+0.0455, +0.0713] → differ; stiffness: overlap 0.01444 → 0.00594, −0.0085
+    [−0.0107, −0.0063] against ±0.00102 → differ (Hertz: ×4^(−2/3) = 0.40).
+    Rolling off is not in this test: on a sliding flat it changes nothing, and on the rolling-held
+    flat at μs 0.5 its effect needs the standard set's cell and 3 seeds (the power table)."""
+    need_binary("liggghts")
+    need_binary("yade")
+    path = tmp_path / "xc.toml"
+    path.write_text(TINY_PERIODIC)
+    verdicts = {}
+    for name, alteration in (("true", None), ("friction", {"friction": 1.3}), ("stiffness", {"stiffness": 4.0})):
+        out = tmp_path / name
+        if name != "true":
+            _copy_done(tmp_path / "true", out)             # the same LIGGGHTS runs: no rerun
+        use_yade(mismapped_yade(**alteration) if alteration else None)
+        report = crosscheck(path, output=out)
+        assert not report.missing
+        j = report.judged.set_index("metric")
+        verdicts[name] = {m: j.loc[m, "verdict"] for m in ("residual_stress_ratio", "overlap_mean_d50")}
+        for m in ("residual_stress_ratio", "overlap_mean_d50"):
+            r = j.loc[m]
+            print(f"\n{name}: {m} LIGGGHTS {r.liggghts:.4g} YADE {r.yade:.4g} diff {r['diff']:+.3g} "
+                  f"[{r.diff_lo:+.3g}, {r.diff_hi:+.3g}] tol ±{r.tolerance:.3g} → {r.verdict}")
+    assert verdicts["true"]["residual_stress_ratio"] == "agree"
+    assert verdicts["true"]["overlap_mean_d50"] != "differ"
+    assert verdicts["friction"]["residual_stress_ratio"] == "differ"
+    assert verdicts["stiffness"]["overlap_mean_d50"] == "differ"
