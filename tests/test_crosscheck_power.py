@@ -264,7 +264,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tmp
     """The true mapping, friction × 1.3 and stiffness × 4 on the same three LIGGGHTS runs of a tiny
     periodic flat at μs = 0.2: friction → the critical-state ratio DIFFERS; stiffness → the mean
     overlap DIFFERS; the true mapping → the critical ratio AGREES and the overlap does not differ.
-    Measured 2026-11-23 (8 min 1 s on the 2-core machine with ~8 other engine processes running;
+    Measured 2026-11-23 (4 min 37 s, and 8 min 1 s with ~8 other engine processes, on the busy 2 cores;
     ~12 runs of ~100 grains): true: ratio 0.1943 vs 0.1998, +0.0055 [−0.0099, +0.0209] → agree,
     overlap −5.6e-05 [−0.00168, +0.00157] against ±0.00144 → undecided (3 seeds of ~100 grains; the
     standard set's 250-grain cell decides it: agree at 5 seeds, docs/crosscheck.md); friction: ratio
