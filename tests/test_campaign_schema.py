@@ -34,6 +34,7 @@ BAD_FILES = {
     "unknown_section.toml": (7, "sweeps"),
     "negative_jobs.toml": (5, "jobs"),
     "bad_profile_param.toml": (8, "height"),
+    "bad_box_seeds.toml": (8, "pairs.seeds"),
 }
 
 
@@ -152,6 +153,17 @@ case = {shear_distance = 0.004}
     for x in inter:
         assert c.cases[x.pair].case.seed == x.case.seed
     assert c.output == tmp_path / "o"
+
+    # [pairs] seeds: every soil's box test on further seeds too (the paired ones not repeated),
+    # the interface cases and their pairing unchanged
+    f.write_text(f.read_text().replace("case = {shear_distance = 0.004}",
+                                       "case = {shear_distance = 0.004}\nseeds = [2, 3, 4]"))
+    more = load_campaign(f, output=tmp_path / "o")
+    boxes = [x for x in more.cases if x.role == "box"]
+    assert sorted(b.case.seed for b in boxes) == [1, 2, 3, 4]
+    assert all(b.case.shear_distance == 0.004 for b in boxes)
+    assert [x.case for x in more.cases if x.role == "interface"] == [x.case for x in inter]
+    assert [more.cases[x.pair].case for x in more.cases if x.role == "interface"] == [c.cases[x.pair].case for x in inter]
 
 
 # ---- case ids -------------------------------------------------------------------------------

@@ -92,6 +92,30 @@ def test_seed_states_set_tan_delta_and_the_box_values():
     assert p["efficiency"].tolist() == pytest.approx([0.405 / 0.6, 0.425 / 0.6])
 
 
+def test_box_tests_on_further_seeds_join_every_case_of_their_soil():
+    # 3 interface seeds paired with box seeds 1-3, and [pairs] seeds 4-6 of the same soil (no
+    # interface case pairs with them), plus a box test of another soil that must stay out
+    from interphase.report.ensembles import box_pools
+
+    summ = seeded_summaries(k=3, seeds=3)
+    soil = dict(group="box", role="box", test="box", gradation="poly", normal_stress=1e5)
+    summ = summ.assign(gradation="poly", normal_stress=1e5)
+    extra = [dict(soil, case_id=f"box{s}", label=f"box-s{s}", peak_stress_ratio=v, seed=s)
+             for s, v in ((4, 0.50), (5, 0.65), (6, 0.52))]
+    other = [dict(soil, case_id="boxhi", label="box-s1", normal_stress=2e5, peak_stress_ratio=0.9, seed=1)]
+    summ = pd.concat([summ, pd.DataFrame(extra + other)], ignore_index=True)
+    pools = box_pools(summ)
+    assert pools["box1"] == ("box1", "box2", "box3", "box4", "box5", "box6") and pools["boxhi"] == ("boxhi",)
+    runs = prepare_points(summ)
+    states = dict(zip(summ["case_id"], summ["peak_stress_ratio"]))
+    p = seed_ensemble(runs, states, box_pools=pools).points
+    tan_phi = [*TAN_PHI[:3], 0.50, 0.65, 0.52]
+    assert (p["box_seeds"] == 6).all() and p["tan_phi"].tolist() == pytest.approx([np.mean(tan_phi)] * 3)
+    three = seed_ensemble(runs, states).points              # the pair_ids alone
+    assert (three["box_seeds"] == 3).all()
+    assert (p["efficiency_hi"] - p["efficiency_lo"] < three["efficiency_hi"] - three["efficiency_lo"]).all()
+
+
 def test_large_seed_scatter_widens_the_fit_interval_beyond_the_residual_bootstrap():
     # each case's seed mean lies exactly on the plateau (residual bootstrap: no spread) but its seeds
     # scatter by 4° and 0.08 in E: the seed bootstrap must show that
@@ -200,6 +224,8 @@ def test_real_points_are_the_physical_cases_with_the_ensembles_table_values(quic
                           {**ens.runs.set_index("case_id")["tan_delta_seed"].to_dict(),
                            **_box_states(ens)}).points
     np.testing.assert_allclose(again["efficiency"], ens.points["efficiency"], rtol=1e-12)
+    for end in ("_lo", "_hi"):                               # and so does its interval (ratio_interval)
+        np.testing.assert_allclose(again["efficiency" + end], ens.points["efficiency" + end], rtol=1e-9)
 
 
 def _box_states(ens):

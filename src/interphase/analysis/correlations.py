@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-from interphase.analysis.ensemble import physical_case
+from interphase.analysis.ensemble import physical_case, ratio_interval
 
 MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
@@ -440,7 +440,6 @@ SHARED = ("group", "friction_ps", "gradation", "profile_kind", "flat_spaced", "n
           "ar", "rtmax", "device", "d50", "test", "role")
 #: quantities set by the surface alone: the same for every seed, drawn without an x error bar
 SEED_INVARIANT = frozenset({"theta_a_deg_92", "theta_a_deg_90", "theta_a_ccw_deg_90", "rnc", "rn"})
-N_BOOT_E = 2000      # resamples of E's interval when no ensembles table gives it (as analysis.ensemble)
 
 
 def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -456,6 +455,16 @@ def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray,
         half = stats.t.ppf(0.975, np.maximum(n - 1, 1)) * np.sqrt(var) / np.sqrt(n)
     half = np.where(n >= 2, half, np.nan)
     return mean, mean - half, mean + half, n
+
+
+def _group_sd(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per code 0..k−1: mean, sample sd (NaN below two values) and count of the finite values."""
+    mean, _, _, n = _group_t(values, codes, k)
+    ok = np.isfinite(values)
+    dev = np.where(ok, values - mean[codes], 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sd = np.sqrt(np.bincount(codes, weights=dev * dev, minlength=k) / (n - 1))
+    return mean, np.where(n >= 2, sd, np.nan), n
 
 
 def _padded(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -543,7 +552,7 @@ class SeedEnsemble:
 
 
 def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | None = None, *,
-                  seed: int = 0) -> SeedEnsemble:
+                  box_pools=None) -> SeedEnsemble:
     """Group run-level points (prepare_points) by physical case.
 
     states     optional {case_id: value}: each interface run's peak state and each box run's (the value
@@ -552,8 +561,11 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     ensembles  optional table of report.ensembles (group, case, tan_delta…, tan_phi…, E…): its tan δ,
                tan φ and E with their intervals replace the ones computed here (they agree when
                `states` came from the same curves), so each E carries its box test's interval.
-    Without `ensembles`, E's interval is a percentile bootstrap of the ratio of seed means (N_BOOT_E
-    draws, generator `seed`), as analysis.ensemble.ensemble_efficiency."""
+    box_pools  optional {pair_id: every box test of that soil}: a case's box ensemble is the union of
+               its pair_ids' pools, so soil tests run on more seeds than the interface cases
+               ([pairs] seeds) all count (report.ensembles.box_pools); without it, the pair_ids.
+    Without `ensembles`, E's interval is that of a ratio of independent seed means
+    (analysis.ensemble.ratio_interval), as analysis.ensemble.ensemble_efficiency."""
     runs = runs.copy().reset_index(drop=True)
     if "physical_case" not in runs:
         runs["physical_case"] = _col(runs, "label", "").map(physical_case)
@@ -579,7 +591,13 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     box_sets, box_of_case = {}, np.full(k, -1)
     box_members: list[dict] = []
     for i, (ids, vals) in enumerate(zip(pd.Series(pair.to_numpy()).groupby(codes), pd.Series(box_val.to_numpy()).groupby(codes))):
-        members = {str(b): float(v) for b, v in zip(ids[1], vals[1]) if b is not None and b == b and math.isfinite(v)}
+        pids = {str(b) for b in ids[1] if b is not None and b == b}
+        pooled = sorted({m for p in pids for m in (box_pools.get(p, (p,)) if box_pools else (p,))})
+        if state_of is not None:
+            members = {b: float(state_of.get(b, np.nan)) for b in pooled}
+        else:
+            members = {str(b): float(v) for b, v in zip(ids[1], vals[1]) if b is not None and b == b}
+        members = {b: v for b, v in members.items() if math.isfinite(v)}
         if not members:
             continue
         key = tuple(sorted(members))
@@ -617,17 +635,14 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     with np.errstate(invalid="ignore", divide="ignore"):
         pts["efficiency"] = pts["peak_stress_ratio"] / pts["tan_phi"]
     ens = SeedEnsemble(pts, runs, box_values, box_counts, box_of_case)
-    if k:
-        e = ens.replicates(["efficiency"], N_BOOT_E, seed)["efficiency"]
-        two = (pts["seeds"].to_numpy() >= 2) & (pts["box_seeds"].to_numpy() >= 2)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            q = np.nanpercentile(e, [2.5, 97.5], axis=0) if len(e) else np.full((2, k), np.nan)
-        pts["efficiency_lo"] = np.where(two, q[0], np.nan)
-        pts["efficiency_hi"] = np.where(two, q[1], np.nan)
-        ens._cache.pop((N_BOOT_E, seed), None)
+    a_mean, a_sd, a_n = _group_sd(runs["tan_delta_seed"].to_numpy(float), codes, k)
+    if m:
+        b_mean, b_sd, b_n = (x[np.maximum(box_of_case, 0)] for x in
+                             _group_sd(box_values.ravel(), np.repeat(np.arange(m), width), m))
     else:
-        pts["efficiency_lo"] = pts["efficiency_hi"] = pd.Series(dtype=float)
+        b_mean = b_sd = b_n = np.full(k, np.nan)
+    lo, hi = ratio_interval(a_mean, a_sd, a_n, b_mean, b_sd, b_n)
+    pts["efficiency_lo"], pts["efficiency_hi"] = (np.where(has, lo, np.nan), np.where(has, hi, np.nan)) if k else ([], [])
     if ensembles is not None and len(ensembles) and k:
         tab = ensembles.assign(group=ensembles["group"].astype(str), case=ensembles["case"].astype(str))
         tab = tab.set_index(["group", "case"])

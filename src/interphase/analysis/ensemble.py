@@ -18,8 +18,11 @@ Definitions (shear displacement s [m], stress ratio r(s) [-] = τ/σ on the surf
   - critical = mean over seeds of each seed's mean r over s ≥ (1 − critical_fraction)·s_end;
     interval: Student t on the seed means.
   - E = peak(interface)/peak(box) and critical(interface)/critical(box), from the seed values
-    above; interval: percentile bootstrap of the ratio of means, the seeds of the two tests
-    resampled independently (`n_boot` resamples, fixed generator seed).
+    above; interval: `ratio_interval`, the delta method on log E with Welch–Satterthwaite degrees of
+    freedom (the two tests' seeds are independent samples). Why not a percentile bootstrap of the
+    ratio of means, as before 2026-11-23: with 3 seeds a side it resamples only 10 distinct means per
+    side and ignores that the sd is estimated, so its "95 %" interval covered the true E in 80 % of
+    synthetic trials at a 15 % scatter a side, this interval in 96 % (tests/test_ensemble.py).
 A single seed gives the values with NaN intervals (and says so).
 """
 
@@ -35,7 +38,6 @@ from interphase.analysis.strength import moving_average
 
 CRITICAL_FRACTION = 0.4     # the last 40 % of the shear (3.6–6 mm of the convergence runs' 6 mm)
 GRID_POINTS = 400
-N_BOOT = 2000
 
 
 @dataclass(frozen=True)
@@ -105,6 +107,33 @@ def t_interval(values) -> tuple[float, float]:
     return m - half, m + half
 
 
+def ratio_interval(mean_a, sd_a, n_a, mean_b, sd_b, n_b, level: float = 0.95):
+    """(lo, hi) of the ratio of two independent means ā/b̄ (each of n samples with sd s), elementwise.
+
+    Delta method on the log: var(log ā/b̄) ≈ s_a²/(n_a ā²) + s_b²/(n_b b̄²); Student t with the
+    Welch–Satterthwaite degrees of freedom of those two terms; the interval is exp(log ā/b̄ ± t·se),
+    asymmetric about the ratio as a ratio's should be. NaN where a side has fewer than two values or
+    a non-positive mean; a point interval when both sds are 0."""
+    a, sa, na, b, sb, nb = (np.asarray(x, float) for x in (mean_a, sd_a, n_a, mean_b, sd_b, n_b))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ua, ub = sa * sa / (na * a * a), sb * sb / (nb * b * b)
+        u = ua + ub
+        dof = u * u / (ua * ua / (na - 1) + ub * ub / (nb - 1))
+        t = stats.t.ppf(0.5 + level / 2, np.where(np.isfinite(dof) & (dof > 0), dof, 1.0))
+        half = np.where(u > 0, t * np.sqrt(u), 0.0)
+        r = a / b
+        ok = (na >= 2) & (nb >= 2) & (a > 0) & (b > 0) & np.isfinite(u)
+        lo, hi = np.where(ok, r * np.exp(-half), np.nan), np.where(ok, r * np.exp(half), np.nan)
+    return (float(lo), float(hi)) if lo.ndim == 0 else (lo, hi)
+
+
+def _ratio_of_means(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    sd = lambda v: float(np.std(v, ddof=1)) if v.size > 1 else math.nan
+    return (float(a.mean() / b.mean()),
+            *ratio_interval(a.mean(), sd(a), a.size, b.mean(), sd(b), b.size))
+
+
 def _states(curves, window: float, critical_fraction: float, grid_points: int):
     grid = _grid(curves, grid_points)
     mat = _on_grid(curves, grid)
@@ -130,27 +159,18 @@ def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITI
 
 
 def ensemble_efficiency(interface_curves, box_curves, window: float, *,
-                        critical_fraction: float = CRITICAL_FRACTION, grid_points: int = GRID_POINTS,
-                        n_boot: int = N_BOOT, seed: int = 0) -> EnsembleEfficiency:
+                        critical_fraction: float = CRITICAL_FRACTION,
+                        grid_points: int = GRID_POINTS) -> EnsembleEfficiency:
     """E = tan δ / tan φ from the two ensembles (peak over peak, critical over critical), with
-    bootstrap intervals (each test's seeds resampled on its own)."""
+    95 % intervals of a ratio of independent means (`ratio_interval`)."""
     a, b = _usable(interface_curves), _usable(box_curves)
     if not a or not b:
         nan = math.nan
         return EnsembleEfficiency(nan, nan, nan, nan, nan, nan, "no run with a stress ratio on a side")
     pa, _, ca = _states(a, window, critical_fraction, grid_points)
     pb, _, cb = _states(b, window, critical_fraction, grid_points)
-    e_peak, e_crit = float(pa.mean() / pb.mean()), float(ca.mean() / cb.mean())
-    if len(a) < 2 or len(b) < 2:
-        nan = math.nan
-        return EnsembleEfficiency(e_peak, nan, nan, e_crit, nan, nan, "fewer than two seeds on a side: no interval")
-    rng = np.random.default_rng(seed)
-    ia = rng.integers(0, len(a), (n_boot, len(a)))
-    ib = rng.integers(0, len(b), (n_boot, len(b)))
-    peaks = pa[ia].mean(axis=1) / pb[ib].mean(axis=1)
-    crits = ca[ia].mean(axis=1) / cb[ib].mean(axis=1)
-    (pl, ph), (cl, ch) = np.nanpercentile(peaks, [2.5, 97.5]), np.nanpercentile(crits, [2.5, 97.5])
-    return EnsembleEfficiency(e_peak, float(pl), float(ph), e_crit, float(cl), float(ch))
+    reason = "" if len(a) > 1 and len(b) > 1 else "fewer than two seeds on a side: no interval"
+    return EnsembleEfficiency(*_ratio_of_means(pa, pb), *_ratio_of_means(ca, cb), reason)
 
 
 # ---- additions for the report's per-case points (analysis.correlations.seed_ensemble) --------------

@@ -38,6 +38,8 @@ File layout (SI units; [case] keys are the field names of `interphase.case.Case`
     [pairs]                            # paired direct shear box tests, for E = tan δ / tan φ
     box = true                         # default: true when the campaign has interface cases
     case = {shear_distance = 0.004}    # overrides for the box tests
+    seeds = [1, 2, 3, 4, 5, 6]         # each soil's box test also on these packing seeds: tan φ, shared
+                                       # by every interface case on that soil, rests on more seeds
 
 Every message names the file, the line of the key, the key, the allowed values and the fix.
 """
@@ -64,7 +66,7 @@ TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs",
 CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output")
 EXECUTION_KEYS = ("executor", "jobs", "partition", "time_limit", "time_factor", "max_concurrent")
 GROUP_KEYS = ("name", "description", "case", "sweep", "zip")
-PAIR_KEYS = ("box", "case")
+PAIR_KEYS = ("box", "case", "seeds")
 CASE_FIELDS = tuple(f for f in Case.__dataclass_fields__)
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
@@ -515,6 +517,11 @@ def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) ->
         if bad in overrides:
             raise ctx.error(("pairs", "case", bad), f"{bad} of a paired box test is set by the campaign",
                             "remove it (box tests have no surface)")
+    seeds = pairs.get("seeds", [])
+    if (not isinstance(seeds, list) or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1
+                                                for x in seeds) or len(set(seeds)) != len(seeds)):
+        raise ctx.error(("pairs", "seeds"), f"must be a list of distinct packing seeds (integers ≥ 1), got {seeds!r}",
+                        "e.g. seeds = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]")
     if not want:
         return cases
     out = list(cases)
@@ -537,4 +544,14 @@ def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) ->
             index[key] = len(out)
             out.append(CampaignCase(box, "box", "box", (("pair_of", c.group),)))
         out[i] = CampaignCase(c.case, c.group, c.role, c.values, index[key])
+    for j in range(len(out)):               # the soils' further seeds, after every paired test
+        b = out[j]
+        if b.role != "box" or j < len(cases):
+            continue
+        for seed in seeds:
+            extra = b.case.replace(seed=seed)
+            key = canonical_json(extra.canonical())
+            if key not in index:
+                index[key] = len(out)
+                out.append(CampaignCase(extra, "box", "box", b.values))
     return out

@@ -50,17 +50,16 @@ class ReportResult:
     criterion_check: pd.DataFrame | None = None   # criterion_checks: the chain against every case
 
 
-def ensemble_points(summaries: pd.DataFrame, store=None, *, seed: int = 0,
-                    e_note: float = 1.2) -> tuple[SeedEnsemble, pd.DataFrame | None]:
+def ensemble_points(summaries: pd.DataFrame, store=None, *, e_note: float = 1.2) -> tuple[SeedEnsemble, pd.DataFrame | None]:
     """The physical cases' points and their seed ensemble, and the ensembles table (None without a
     store: then tan δ is the mean of the runs' own peaks and E the ratio of seed means)."""
     runs = prepare_points(summaries)
-    table, states = None, None
+    table, states, pools = None, None, None
     if store is not None:
         from interphase.report.ensembles import ensemble_tables
 
-        table, states = ensemble_tables(summaries, store, e_note=e_note)
-    return seed_ensemble(runs, states, table, seed=seed), table
+        table, states, pools = ensemble_tables(summaries, store, e_note=e_note)
+    return seed_ensemble(runs, states, table, box_pools=pools), table
 
 
 CHECK_COLUMNS = {"fold": "fold", "group": "group", "physical_case": "case", "friction_ps": "μs",
@@ -247,7 +246,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     fdir.mkdir(parents=True, exist_ok=True)
     res = ReportResult(out)
     prov = provenance(store, summaries)
-    ens, ens_table = ensemble_points(summaries, store, seed=seed, e_note=T.E_NOTE)
+    ens, ens_table = ensemble_points(summaries, store, e_note=T.E_NOTE)
     points, runs = ens.points, ens.runs
     res.points, res.runs, res.ensemble = points, runs, ens
     n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0

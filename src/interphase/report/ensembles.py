@@ -1,8 +1,9 @@
 """The report's seed-ensemble table: each physical case's tan δ, its paired box tests' tan φ and E,
 at the peak and at the critical state, each with its 95 % interval (analysis.ensemble).
 
-A physical case is a campaign group's case label without its seed (`…-s3`); its box tests are the
-pair_id rows of its seeds. Curves come from each finished case's series.parquet (shear_disp,
+A physical case is a campaign group's case label without its seed (`…-s3`); its box tests are every
+box test of the soil its seeds are paired with (`box_pools`): the pair_id rows, and the soil tests
+that `[pairs] seeds` ran on further seeds. Curves come from each finished case's series.parquet (shear_disp,
 stress_ratio: the window ratio of an interface test, the shear plane's of a box test).
 """
 
@@ -23,7 +24,27 @@ COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "
            "theta_r_hi", "theta_a_deg_92", "note")
 
 
-__all__ = ["COLUMNS", "ensemble_table", "ensemble_tables", "physical_case"]
+__all__ = ["COLUMNS", "box_pools", "ensemble_table", "ensemble_tables", "physical_case"]
+
+#: Case inputs that do not make a soil test another soil: its seed and the surface's fields
+_NOT_SOIL = frozenset({"seed", "name", "profile", "test", "friction_ps"})
+
+
+def box_pools(summaries: pd.DataFrame) -> dict[str, tuple[str, ...]]:
+    """{box case_id: every finished box test of the same soil}, the soil being every Case input the
+    summaries carry except the seed (and the surface's fields, empty for a box), and the engine."""
+    from interphase.case import Case
+
+    test = summaries.get("test", pd.Series("", index=summaries.index)).astype(str)
+    box = summaries[test.eq("box")]
+    if box.empty:
+        return {}
+    cols = [c for c in (*Case.__dataclass_fields__, "engine") if c in box and c not in _NOT_SOIL]
+    key = (box[cols].astype(str).groupby(cols, dropna=False, sort=False).ngroup() if cols
+           else pd.Series(0, index=box.index))
+    ids = box["case_id"].astype(str)
+    pools = ids.groupby(key.to_numpy()).agg(lambda v: tuple(sorted(v)))
+    return {cid: pools[k] for cid, k in zip(ids, key)}
 
 
 def _mean_interval(values) -> tuple[float, float, float]:
@@ -52,14 +73,15 @@ def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd
     return ensemble_tables(summaries, store, e_note=e_note)[0]
 
 
-def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> tuple[pd.DataFrame, dict]:
-    """(the ensembles table, {case_id: the run's peak state}) — the second for every interface run and
-    box test with a curve: the value its ensemble's peak averages (analysis.ensemble.seed_peak_states),
-    which the correlations' seed bootstrap resamples (analysis.correlations.seed_ensemble)."""
+def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> tuple[pd.DataFrame, dict, dict]:
+    """(the ensembles table, {case_id: the run's peak state}, box_pools(summaries)) — the second for
+    every interface run and box test with a curve: the value its ensemble's peak averages
+    (analysis.ensemble.seed_peak_states), which the correlations' seed bootstrap resamples
+    (analysis.correlations.seed_ensemble, given the pools)."""
     if summaries is None or summaries.empty or store is None:
-        return pd.DataFrame(columns=COLUMNS), {}
+        return pd.DataFrame(columns=COLUMNS), {}, {}
+    pools = box_pools(summaries)
     rows = summaries.assign(_case=summaries["label"].map(physical_case))
-    by_id = rows.set_index(rows["case_id"].astype(str))
     iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
     cache: dict = {}
     curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, store.curve(cid))
@@ -68,7 +90,8 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
         window = PEAK_WINDOW_D50 * d50
         ids = [str(c) for c in g["case_id"]]
-        box_ids = [str(p) for p in g.get("pair_id", pd.Series(dtype=object)).dropna().unique() if str(p) in by_id.index]
+        paired = {str(p) for p in g.get("pair_id", pd.Series(dtype=object)).dropna().unique()}
+        box_ids = sorted({b for p in paired for b in pools.get(p, ())})
         for group_ids in (ids, box_ids):
             got = [curve(c) for c in group_ids]
             states.update({c: float(v) for c, v in zip(group_ids, seed_peak_states(got, window))
@@ -94,4 +117,4 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
                         E_cs_hi=e.critical_hi, theta_r_deg=th[0], theta_r_lo=th[1], theta_r_hi=th[2],
                         theta_a_deg_92=float(pd.to_numeric(g.get("theta_a_deg_92"), errors="coerce").median()),
                         note="; ".join(notes)))
-    return pd.DataFrame(out, columns=COLUMNS), states
+    return pd.DataFrame(out, columns=COLUMNS), states, pools
