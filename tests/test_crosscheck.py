@@ -77,6 +77,41 @@ def test_bad_tolerances_name_file_line_and_key(body, line, words):
     assert f"cc.toml:{line + 1}" in msg and words in msg
 
 
+def test_judged_in_limits_a_tolerance_to_groups_and_reports_it_elsewhere():
+    _, tol = split_crosscheck('[crosscheck]\njudged_in = {critical_ratio_abs = ["sliding"]}\n', "x.toml")
+    assert tol["judged_in"] == {"critical_ratio_abs": ("sliding",)} and tol["critical_ratio_abs"] == 0.03
+    s = {f"{name}-s{k}": {e: {"residual_stress_ratio": v + (0.001 if e == "yade" else 0), "overlap_mean_d50": 0.015}
+                          for e in ENGINES}
+         for name, v in (("slide", 0.2), ("roll", 0.3)) for k in (1, 2, 3)}
+    groups = {lab: "sliding" if lab.startswith("slide") else "rolling" for lab in s}
+    t = compare(s, {}, tol, groups).set_index(["level", "physical", "metric"]).loc["ensemble"]
+    assert t.loc[("slide", "residual_stress_ratio"), "verdict"] == "agree"
+    roll = t.loc[("roll", "residual_stress_ratio")]
+    assert pd.isna(roll.verdict) and roll["diff"] == pytest.approx(0.001)  # reported, with its interval
+    assert t.loc[("roll", "overlap_mean_d50"), "verdict"] == "agree"        # other tolerances judge everywhere
+
+
+@pytest.mark.parametrize("body, words", [
+    ('judged_in = ["sliding"]', "must be a table"),
+    ('judged_in = {angle = ["a"]}', "unknown tolerance 'angle'"),
+    ('judged_in = {angle_deg = []}', "non-empty list"),
+])
+def test_bad_judged_in_is_located(body, words):
+    with pytest.raises(InputError, match=words) as err:
+        split_crosscheck("[campaign]\n[crosscheck]\n" + body + "\n", "cc.toml")
+    assert "cc.toml:3" in str(err.value)
+
+
+def test_judged_in_names_a_group_of_the_campaign(tmp_path):
+    from interphase.campaign.crosscheck import load
+
+    f = tmp_path / "xc.toml"
+    f.write_text(CAMPAIGN.replace("angle_deg = 3.0", 'judged_in = {angle_deg = ["slidng"]}'))
+    with pytest.raises(InputError, match="no group 'slidng'") as err:
+        load(f)
+    assert "xc-tiny" in str(err.value.fix) and "box" in str(err.value.fix)
+
+
 TOL = {"stress_ratio_rel": 0.10, "angle_deg": 3.0}
 
 

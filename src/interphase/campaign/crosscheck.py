@@ -16,6 +16,9 @@ so every other line keeps its number in error messages):
     overlap_rel = 0.10         # mean contact overlap: × the mean of the two engines
     stress_ratio_rel = 0.10    # optional: judge the peak stress ratio too (else reported only)
     peak_angle_deg = 3.0       # optional: judge θr, θn at the peak snapshot too (else reported only)
+    judged_in = {critical_ratio_abs = ["sliding"]}   # optional: a tolerance judges only these groups'
+                               # cases (campaign [[group]] names, "box" for the soil tests); elsewhere
+                               # its metric is reported with its interval
 
 The verdict. A physical case is a case label without its `-s<seed>` suffix; its seeds are the
 packings both engines finished. Per metric, the PAIRED difference YADE − LIGGGHTS (same packing seed)
@@ -58,6 +61,7 @@ DEFAULT_TOLERANCES = {"critical_ratio_abs": 0.03, "angle_deg": 3.0, "overlap_rel
 #: seed scatter is that of one stick–slip event (without them these metrics are reported only)
 OPTIONAL_TOLERANCES = ("stress_ratio_rel", "peak_angle_deg")
 TOLERANCE_KEYS = (*DEFAULT_TOLERANCES, *OPTIONAL_TOLERANCES)
+TABLE_KEYS = (*TOLERANCE_KEYS, "judged_in")
 #: (row key, unit, how compared: "rel" | "abs" | None, tolerance key); a metric whose tolerance key is
 #: not among the tolerances in force is reported (difference and interval), not judged
 METRICS = (
@@ -89,15 +93,34 @@ def split_crosscheck(text: str, where: str) -> tuple[str, dict]:
     for key, value in table.items():
         line = next((start + 1 + k for k, ln in enumerate(lines[start:end]) if re.match(rf"^\s*{re.escape(key)}\s*=", ln)),
                     start + 1)
-        if key not in TOLERANCE_KEYS:
+        if key not in TABLE_KEYS:
             raise InputError(f"unknown key {key!r} in [crosscheck]", where=f"{where}:{line}",
-                             fix=f"allowed keys: {', '.join(TOLERANCE_KEYS)}")
+                             fix=f"allowed keys: {', '.join(TABLE_KEYS)}")
+        if key == "judged_in":
+            tolerances[key] = _judged_in(value, f"{where}:{line}")
+            continue
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
             raise InputError(f"[crosscheck].{key} must be a positive number, got {value!r}", where=f"{where}:{line}",
                              fix="e.g. critical_ratio_abs = 0.03, angle_deg = 3.0, overlap_rel = 0.10")
         tolerances[key] = float(value)
     blanked = lines[:start] + ["#\n"] * (end - start) + lines[end:]
     return "".join(blanked), tolerances
+
+
+def _judged_in(value, where: str) -> dict[str, tuple[str, ...]]:
+    fix = 'e.g. judged_in = {critical_ratio_abs = ["sliding"]}: a tolerance key → a list of group names'
+    if not isinstance(value, dict):
+        raise InputError(f"[crosscheck].judged_in must be a table, got {value!r}", where=where, fix=fix)
+    out = {}
+    for k, groups in value.items():
+        if k not in TOLERANCE_KEYS:
+            raise InputError(f"[crosscheck].judged_in: unknown tolerance {k!r}", where=where,
+                             fix=f"one of {', '.join(TOLERANCE_KEYS)}")
+        if not isinstance(groups, list) or not groups or not all(isinstance(g, str) for g in groups):
+            raise InputError(f"[crosscheck].judged_in.{k} must be a non-empty list of group names, got {groups!r}",
+                             where=where, fix=fix)
+        out[k] = tuple(groups)
+    return out
 
 
 def load(path: str | os.PathLike, output=None):
@@ -111,7 +134,13 @@ def load(path: str | os.PathLike, output=None):
         raise InputError(f"cannot read the campaign file ({exc.strerror})", where=str(path),
                          fix="give the path of an existing .toml file") from None
     _, tol = split_crosscheck(text, str(path))   # validates [crosscheck]; the schema skips that table
-    return load_campaign(path, output=output), tol, path, lambda: None
+    campaign = load_campaign(path, output=output)
+    known = {g.name for g in campaign.groups} | {"box"}
+    for k, groups in tol.get("judged_in", {}).items():
+        if unknown := sorted(set(groups) - known):
+            raise InputError(f"[crosscheck].judged_in.{k}: no group {', '.join(map(repr, unknown))} in the campaign",
+                             where=str(path), fix=f"groups: {', '.join(sorted(known))}")
+    return campaign, tol, path, lambda: None
 
 
 #: columns of CrosscheckReport.table. level "ensemble": one judged row per physical case × metric
@@ -267,14 +296,17 @@ def seed_rows(summaries: dict[str, dict[str, dict]], roles: dict[str, str]) -> l
     return rows
 
 
-def judge(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict) -> list[dict]:
+def judge(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict,
+          groups: dict[str, str] | None = None) -> list[dict]:
     """One row per physical case × metric from its seed ensemble: paired YADE − LIGGGHTS over the
-    seeds both engines finished, its 95 % interval, and (metrics with a tolerance) the verdict."""
-    groups: dict[str, list[str]] = {}
+    seeds both engines finished, its 95 % interval, and (metrics with a tolerance in force for the
+    case's group: `tolerances["judged_in"]`, `groups` = label → campaign group) the verdict."""
+    only = tolerances.get("judged_in", {})
+    ensembles: dict[str, list[str]] = {}
     for label in summaries:
-        groups.setdefault(physical_case(label)[0], []).append(label)
+        ensembles.setdefault(physical_case(label)[0], []).append(label)
     rows = []
-    for phys, labels in groups.items():
+    for phys, labels in ensembles.items():
         both = sorted((lab for lab in labels if set(ENGINES) <= set(summaries[lab])),
                       key=lambda lab: physical_case(lab)[1] or 0)
         if not both:
@@ -284,7 +316,10 @@ def judge(summaries: dict[str, dict[str, dict]], roles: dict[str, str], toleranc
             yad = [_num(summaries[lab]["yade"].get(key)) for lab in both]
             row = {"level": "ensemble", "case": phys, "physical": phys, "seed": None,
                    "role": roles.get(both[0], ""), "metric": key, "unit": unit, "kind": kind}
-            rows.append(row | _ensemble(lig, yad, kind, tolerances.get(tol_key) if tol_key else None))
+            tol = tolerances.get(tol_key) if tol_key else None
+            if tol_key in only and (groups or {}).get(both[0]) not in only[tol_key]:
+                tol = None      # reported here: this tolerance judges only the listed groups
+            rows.append(row | _ensemble(lig, yad, kind, tol))
     return rows
 
 
@@ -324,10 +359,11 @@ def _ensemble(lig: list[float], yad: list[float], kind: str | None, tol: float |
     return out
 
 
-def compare(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict) -> pd.DataFrame:
+def compare(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict,
+            groups: dict[str, str] | None = None) -> pd.DataFrame:
     """summaries[label][engine] = summary row → the report table: the ensemble rows (verdicts) of
     `judge`, then the per-seed rows of `seed_rows`."""
-    t = pd.DataFrame(judge(summaries, roles, tolerances) + seed_rows(summaries, roles), columns=COLUMNS)
+    t = pd.DataFrame(judge(summaries, roles, tolerances, groups) + seed_rows(summaries, roles), columns=COLUMNS)
     return t.astype({"seed": "Int64", "seeds": "Int64", "seeds_needed": "Int64", "more_seeds": "Int64"})
 
 
@@ -359,17 +395,18 @@ def crosscheck(path, *, jobs: int | None = None, output=None, rerun_failed: bool
         cleanup()
     summaries: dict[str, dict[str, dict]] = {}
     roles: dict[str, str] = {}
+    groups: dict[str, str] = {}
     missing = []
     for p in planned:
         folder = campaign.output / p.case_id
         label = p.label if p.role == "interface" else f"box ({p.label})"
-        roles[label] = p.role
+        roles[label], groups[label] = p.role, p.group
         data = st.read_json(folder / st.SUMMARY_JSON) if (folder / st.DONE).exists() else None
         if data is None:
             missing.append((label, p.engine, st.folder_status(folder) if folder.exists() else "not run"))
             continue
         summaries.setdefault(label, {})[p.engine] = data.get("row", data)
-    table = compare(summaries, roles, tol)
+    table = compare(summaries, roles, tol, groups)
     report = CrosscheckReport(campaign.name, campaign.output, tol, table, missing)
     campaign.output.mkdir(parents=True, exist_ok=True)
     table.to_csv(campaign.output / "crosscheck.csv", index=False)
