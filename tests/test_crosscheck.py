@@ -1,5 +1,7 @@
 """`campaign crosscheck`: tolerance table parsing, the verdict on seed ensembles (paired difference,
-interval, agree/differ/undecided), and one real run of both engines on a tiny flat case, 2 seeds."""
+interval, agree/differ/undecided). The real cross-check of both engines (3 seeds of a tiny sliding
+flat) is tests/test_crosscheck_power.py::test_real_crosscheck_table_files_and_json, on the runs that
+module's power test shares."""
 
 from __future__ import annotations
 
@@ -11,11 +13,9 @@ import pandas as pd
 import pytest
 
 from interphase.analysis.difference import difference
-from interphase.campaign.crosscheck import (DEFAULT_TOLERANCES, ENGINES, METRICS, CrosscheckReport, compare, crosscheck,
+from interphase.campaign.crosscheck import (DEFAULT_TOLERANCES, ENGINES, CrosscheckReport, compare, crosscheck,
                                           physical_case, split_crosscheck)
-from interphase.cli import main
 from interphase.errors import InputError
-from tests.conftest import need_binary
 
 CAMPAIGN = """\
 [campaign]
@@ -267,44 +267,6 @@ def xc_file(tmp_path_factory):
     path = folder / "xc.toml"
     path.write_text(CAMPAIGN)
     return path, folder / "out"
-
-
-@pytest.fixture(scope="module")
-def tiny_campaign(xc_file):
-    need_binary("liggghts")
-    need_binary("yade")
-    return xc_file
-
-
-@pytest.mark.liggghts
-@pytest.mark.yade
-def test_real_crosscheck_of_a_flat_case(tiny_campaign, capsys):
-    """Both engines run 2 packing seeds of a flat surface at μs = 0.2, where the peak is sliding at
-    μs in both: the paired difference of the peak stress ratio is ~0 with a narrow interval, so the
-    engines AGREE on it (the control of tests/test_crosscheck_power.py, where YADE's surface friction
-    × 1.3 makes the same case DIFFER). The table, files and JSON carry the verdicts."""
-    path, out = tiny_campaign
-    report = crosscheck(path, output=out)
-    assert not report.missing
-    e = report.ensembles.set_index("metric")
-    assert len(report.ensembles) == len(METRICS) and (report.ensembles.physical == "interface-flat-mu0.2-mono").all()
-    assert set(report.seeds.case) == {"interface-flat-mu0.2-mono-s1", "interface-flat-mu0.2-mono-s2"}
-    r = e.loc["peak_stress_ratio"]
-    assert r.seeds == 2 and r.liggghts == pytest.approx(0.2, abs=0.01) and r.yade == pytest.approx(0.2, abs=0.01)
-    assert r.verdict == "agree" and -r.tolerance <= r.diff_lo <= r.diff_hi <= r.tolerance
-    assert pd.isna(e.loc["shear_disp_at_peak", "verdict"])                      # reported only
-    assert set(report.judged.metric) == {m for m, _, _, key in METRICS if key in report.tolerances}
-    assert {"residual_stress_ratio", "theta_r_surface_mean_deg", "overlap_mean_d50", "peak_stress_ratio"} \
-        <= set(report.judged.metric)
-    assert (out / "crosscheck.csv").exists() and "| peak_stress_ratio | 2 |" in (out / "crosscheck.md").read_text()
-    # the CLI reuses the finished cases (no rerun) and prints JSON; exit 0 only if everything agrees
-    capsys.readouterr()
-    code = main(["crosscheck", str(path), "--output", str(out), "--json", "--no-run"])
-    data = json.loads(capsys.readouterr().out)
-    assert code == (0 if data["passed"] else 1)
-    assert data["passed"] == all(r["verdict"] == "agree" for r in data["rows"] if r["verdict"] is not None)
-    row = next(r for r in data["rows"] if r["metric"] == "peak_stress_ratio")
-    assert row["verdict"] == "agree" and {"diff_lo", "diff_hi", "seeds_needed", "tolerance"} <= set(row)
 
 
 def test_a_crosscheck_file_is_a_campaign_too(xc_file):
