@@ -1,5 +1,5 @@
 """The fault suite (issue 17, item 5; docs/reliability.md): every fault injected for real into tiny real
-LIGGGHTS campaigns (~200 grains, a few seconds per case). For each: no finished case lost, no
+LIGGGHTS campaigns (75 grains, a few seconds per case). For each: no finished case lost, no
 half-written case counted as done, and a message that names the case and the cause.
 
 Faults already covered elsewhere are not repeated here (docs/reliability.md lists them): SIGKILL of
@@ -20,6 +20,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -51,6 +52,19 @@ def _start(toml: Path, env: dict | None = None, *args) -> tuple[subprocess.Popen
                             cwd=toml.parent, stdout=open(log, "w"), stderr=subprocess.STDOUT, text=True,
                             start_new_session=True, env=env)
     return proc, log
+
+
+@contextmanager
+def _running(toml: Path, env: dict | None = None, *args):
+    """`campaign run` started as by `_start`, yielding (proc, log); on leaving the block (a failed
+    assertion or wait included) its whole process group is killed if the campaign still runs."""
+    proc, log = _start(toml, env, *args)
+    try:
+        yield proc, log
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
 
 
 def _finish(proc: subprocess.Popen, log: Path, timeout: float = 240) -> str:
@@ -119,12 +133,10 @@ def test_sigkill_of_the_campaign_process_alone_stops_its_worker(tmp_path):
     need_binary("liggghts")
     toml = _campaign(tmp_path, jobs=1)
     out = tmp_path / "out"
-    proc, log = _start(toml)
-    try:
+    with _running(toml) as (proc, log):
         _wait_for(lambda: any(folder_status(f) == "done" for f in _folders(out)) and
                   any(_engine(f) for f in _folders(out) if folder_status(f) == "incomplete"), 150,
                   "one finished case and a running engine")
-    finally:
         proc.send_signal(signal.SIGKILL)                 # the campaign process only, not its group
         proc.wait()
     (done,) = [f for f in _folders(out) if folder_status(f) == "done"]
@@ -154,17 +166,13 @@ def test_sigkill_of_a_worker_mid_case(tmp_path):
     need_binary("liggghts")
     toml = _campaign(tmp_path, jobs=2)
     out = tmp_path / "out"
-    proc, log = _start(toml)
-    try:
+    with _running(toml) as (proc, log):
         _wait_for(lambda: sum(bool(_engine(f)) for f in _folders(out)) == 2, 150, "two running engines")
         victim = sorted(_folders(out), key=lambda f: f.name)[0]
         other = [f for f in _folders(out) if f != victim][0]
         worker = _worker_pid(victim)
         os.kill(worker, signal.SIGKILL)
         text = _finish(proc, log, 120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, text
     _no_traceback(text)
     _no_engine_left(out)
@@ -202,9 +210,8 @@ def test_engine_killed_crashed_or_truncated_dump(tmp_path):
     wrapper.chmod(0o755)
     toml = _campaign(tmp_path, jobs=2)
     out = tmp_path / "out"
-    proc, log = _start(toml, dict(os.environ, INTERPHASE_LIGGGHTS_BINARY=str(wrapper)))
     signalled = {}
-    try:
+    with _running(toml, dict(os.environ, INTERPHASE_LIGGGHTS_BINARY=str(wrapper))) as (proc, log):
         def engines_up():
             by = _by_seed(out)
             return all(s in by and _engine(by[s]) for s in (1, 2))
@@ -217,9 +224,6 @@ def test_engine_killed_crashed_or_truncated_dump(tmp_path):
             os.kill(pid, sig)
             signalled[seed] = pid
         text = _finish(proc, log)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, text
     _no_traceback(text)
     _no_engine_left(out)
@@ -250,16 +254,12 @@ def test_engine_hung_past_its_time_limit(tmp_path):
     need_binary("liggghts")
     toml = _campaign(tmp_path, seeds=(1,))
     out = tmp_path / "out"
-    proc, log = _start(toml, dict(os.environ, INTERPHASE_LIGGGHTS_TIMEOUT="6"))
-    try:
+    with _running(toml, dict(os.environ, INTERPHASE_LIGGGHTS_TIMEOUT="6")) as (proc, log):
         _wait_for(lambda: any(_engine(f) for f in _folders(out)), 150, "a running engine")
         (folder,) = _folders(out)
         os.kill(_engine(folder), signal.SIGSTOP)         # hung: alive, never ending
         t0 = time.monotonic()
         text = _finish(proc, log, 120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, text
     assert time.monotonic() - t0 < 60, "the time limit did not stop the hung engine"
     _no_engine_left(out)
@@ -302,12 +302,8 @@ def test_disk_fills_mid_case(tmp_path, small_disk):
     1, no traceback; with space again, a rerun finishes them."""
     toml = _campaign(tmp_path, jobs=1)
     out = small_disk
-    proc, log = _start(toml)
-    try:
+    with _running(toml) as (proc, log):
         text = _finish(proc, log, 240)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, text
     _no_traceback(text)
     _no_engine_left(out)
@@ -333,8 +329,8 @@ def test_disk_fills_mid_case(tmp_path, small_disk):
     # room again: the rerun finishes the rest, the finished case is not recomputed
     mtime, starts = (done[0] / "DONE").stat().st_mtime_ns, _starts(done[0])
     subprocess.run(["mount", "-o", "remount,size=3m", str(out)], check=True, capture_output=True, timeout=30)
-    proc, log = _start(toml)
-    text = _finish(proc, log, 240)
+    with _running(toml, None, "--jobs", "2") as (proc, log):      # the two left, side by side
+        text = _finish(proc, log, 240)
     assert proc.returncode == 0, text
     assert (done[0] / "DONE").stat().st_mtime_ns == mtime and _starts(done[0]) == starts
     assert all(folder_status(f) == "done" for f in _folders(out)) and len(_folders(out)) == 3
@@ -349,11 +345,10 @@ def test_second_run_status_and_a_deleted_index_while_a_run_writes(tmp_path, caps
     from interphase.cli import main
 
     need_binary("liggghts")
-    toml = _campaign(tmp_path, jobs=1)
+    toml = _campaign(tmp_path, seeds=(1, 2), jobs=1)      # one finished while the other runs: enough
     out = tmp_path / "out"
-    proc, log = _start(toml)
     seen: dict[str, set] = {}
-    try:
+    with _running(toml) as (proc, log):
         _wait_for(lambda: any(_engine(f) for f in _folders(out)), 150, "a running engine")
         second = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(toml), "--plain"],
                                 cwd=tmp_path, capture_output=True, text=True, timeout=120)
@@ -376,12 +371,9 @@ def test_second_run_status_and_a_deleted_index_while_a_run_writes(tmp_path, caps
                     assert (out / c["case_id"] / "DONE").exists(), c
             time.sleep(0.3)
         text = _finish(proc, log)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 0, text
     assert deleted, "the run ended before a case finished"
-    assert len(_folders(out)) == 3 and all(_starts(f) == 1 for f in _folders(out))
+    assert len(_folders(out)) == 2 and all(_starts(f) == 1 for f in _folders(out))
     st = _status(toml)
     assert all(r["status"] == "done" for r in st.values()), st
     # the run's word while it runs, not the folders' (a started folder without DONE is not "incomplete")
@@ -417,8 +409,7 @@ def test_slurm_job_cancelled_and_requeued(slurm, tmp_path):
     toml.write_text(toml.read_text().replace("jobs = 1", 'executor = "slurm"\ntime_limit = 5\nmax_concurrent = 2'))
     out = tmp_path / "out"
     env = slurm.env()
-    proc, log = _start(toml, env)
-    try:
+    with _running(toml, env) as (proc, log):
         _wait_for(lambda: sum(bool(_engine(f)) for f in _by_seed(out).values()) == 2, 150, "two running engines")
         by = _by_seed(out)
         cancelled, requeued = by[1], by[2]
@@ -429,9 +420,6 @@ def test_slurm_job_cancelled_and_requeued(slurm, tmp_path):
         _wait_for(lambda: "BeginTime" in _squeue(env, job), 60, "the requeued job to be held pending")
         subprocess.run(["scontrol", "update", f"JobId={job}", "StartTime=now"], env=env, check=True, timeout=30)
         text = _finish(proc, log, 300)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     _no_traceback(text)
     st = _status(toml)
     fail = _failure(cancelled)
