@@ -3,6 +3,7 @@ the study's five groups, sweeps/zips/groups/pairs, and case ids stable across ru
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from pathlib import Path
 
@@ -18,6 +19,14 @@ ROOT = Path(__file__).resolve().parents[1]
 BAD = ROOT / "tests" / "data" / "campaigns_bad"
 CAMPAIGNS = ROOT / "campaigns"
 FAKE_ID = "0123456789abcdef"   # a recipe id for pure plan tests
+
+
+@functools.lru_cache(maxsize=None)
+def _shipped(name: str):
+    """A shipped campaign file, loaded once for the tests that only read it (group5.toml reads its
+    instrument files and takes ~10 s). test_real_ids_are_stable_across_loads_and_working_directories
+    loads afresh."""
+    return load_campaign(CAMPAIGNS / name)
 
 # file → (line the message must point at, key it must name)
 BAD_FILES = {
@@ -101,10 +110,10 @@ def test_group_files_share_the_study_settings():
     # the settings docs/convergence.md chose are in campaigns/study.toml; the per-group files must
     # not drift from them (profiles, gradations and frictions are each file's own)
     own = {"profile", "gradation", "friction_ps", "name"}
-    ref = next(x.case for x in load_campaign(CAMPAIGNS / "study.toml").cases if x.role == "interface")
+    ref = next(x.case for x in _shipped("study.toml").cases if x.role == "interface")
     keep = {k: v for k, v in ref.canonical().items() if k not in own and k != "seed"}
     for g in range(1, 6):
-        c = load_campaign(CAMPAIGNS / f"group{g}.toml")
+        c = _shipped(f"group{g}.toml")
         for x in c.cases:
             if x.role == "interface":
                 got = {k: v for k, v in x.case.canonical().items() if k in keep}
@@ -113,7 +122,7 @@ def test_group_files_share_the_study_settings():
 
 
 def test_group5_reads_profile_files_relative_to_the_campaign(tmp_path):
-    c = load_campaign(CAMPAIGNS / "group5.toml")
+    c = _shipped("group5.toml")
     prof = next(x for x in c.cases if x.role == "interface").case.profile
     assert prof.kind == "file" and Path(prof.path) == (CAMPAIGNS / "profiles" / "frt-1.frt").resolve()
     assert prof.sha256 == hashlib.sha256((CAMPAIGNS / "profiles" / "frt-1.frt").read_bytes()).hexdigest()
