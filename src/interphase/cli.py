@@ -284,6 +284,10 @@ def _add_campaign(sub) -> None:
     p.add_argument("--dry-run", action="store_true", help="list what would run and render the decks; run nothing")
     p.add_argument("--output", default=None, help="output folder (default: the file's [campaign].output, else runs/NAME)")
     p.add_argument("--plain", action="store_true", help="plain progress lines even on a terminal")
+    p.add_argument("--restore", default=None, metavar="SUMMARIES_CSV",
+                   help="first bring back the finished runs of a summaries table (`campaign report`'s "
+                        "tables/summaries.csv, e.g. a committed copy) whose case ids this campaign plans: "
+                        "a campaign goes on on another machine without rerunning them (no dumps come back)")
     p.set_defaults(func=_cmd_campaign_run)
 
     p = sub.add_parser("status", help="state of every case of a campaign, with failure causes")
@@ -299,7 +303,7 @@ def _cmd_campaign_run(args) -> int:
 
     report = run_campaign(args.campaign, engine=args.engine, executor=args.executor, jobs=args.jobs,
                           rerun_failed=args.rerun_failed, rerun_stale=args.rerun_stale, dry_run=args.dry_run,
-                          output=args.output,
+                          output=args.output, restore=args.restore,
                           live=False if args.plain else None)
     return 0 if args.dry_run else report.exit_code
 

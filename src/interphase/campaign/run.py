@@ -152,7 +152,9 @@ def _slots(campaign: Campaign, executor: str, jobs: int | None) -> int:
 
 def run_campaign(path, *, engine: str | None = None, executor: str | None = None, jobs: int | None = None,
                  rerun_failed: bool = False, rerun_stale: bool = False, dry_run: bool = False, output=None,
-                 stream=None, live: bool | None = None) -> RunReport:
+                 restore=None, stream=None, live: bool | None = None) -> RunReport:
+    """Run what is not finished. `restore`: a summaries table whose rows of planned cases become
+    finished folders first (interphase.campaign.restore), so that only the rest runs."""
     stream = stream or sys.stdout
     campaign = load_campaign(path, output=output)
     executor = executor or campaign.execution.executor
@@ -166,10 +168,15 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         print(f"warning: {w}", file=stream, flush=True)
     builds = engine_builds(p.engine for p in planned)
     if dry_run:
-        return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds)
+        return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds, restore)
 
     store = st.CampaignStore(campaign.output, create=True)
     with store, store.lock("campaign run"):
+        if restore is not None:
+            from interphase.campaign.restore import describe, restore_runs
+
+            print(f"campaign {campaign.name}: {describe(restore_runs(planned, store, restore, campaign.name))}",
+                  file=stream, flush=True)
         store.register(planned)
         store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
         stale = find_stale(planned, store.status(), builds)
@@ -275,11 +282,19 @@ class DiskFull(Interrupted):
 
 
 def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport,
-             rerun_failed: bool = False, rerun_stale: bool = False, builds: dict | None = None) -> RunReport:
+             rerun_failed: bool = False, rerun_stale: bool = False, builds: dict | None = None,
+             restore=None) -> RunReport:
     """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs).
     Finished folders are verified (through the index, as `campaign status` does): a corrupt one is
-    listed as kept, or as rerun with `rerun_failed`."""
+    listed as kept, or as rerun with `rerun_failed`; a case without a folder whose id is a row of
+    `restore` (a summaries table) as restored."""
     from interphase.engines.base import get_engine
+
+    record = set()
+    if restore is not None:
+        from interphase.campaign.restore import read_record
+
+        record = set(read_record(restore)["case_id"])
 
     root = campaign.output / ".dry-run"
     engines = {}
@@ -297,6 +312,9 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
             state = "corrupt"
         if p.case_id in stale:
             action = "rerun (stale)" if rerun_stale else "skip (stale)"
+        elif state == "pending" and not folder.exists() and p.case_id in record:
+            action = "restore"
+            state = "done"
         elif state == "done":
             action = "skip (done)"
         elif state in st.KEPT_STATUSES:

@@ -9,6 +9,8 @@ Folder of one case (`<output>/<case_id>/`), the truth:
     summary.json     the analysis summary (one flat row)
     failure.json     a failed / interrupted / killed attempt: status, cause, message, log tail
     DONE             written LAST, by atomic rename; without it the case is not finished
+A folder restored from a summaries table (interphase.campaign.restore) holds case.json (with
+provenance.restored_from), summary.json, attempts.jsonl and DONE only: no dumps, by design.
 
 The index (`<output>/index.sqlite`) is a cache of the folders for fast status and reports: case id,
 engine, group, label, status, cause, timings, parameters and summary. It is rebuilt from the folders
@@ -204,10 +206,12 @@ def verify_folder(folder: Path, meta: dict | None = None) -> tuple[str | None, s
                 "checked against the folder's name; its tables were checked")
     else:
         return "bad_case_json", f"{cj}: no recipe id (provenance.recipe_id) to check the folder's name with; fix: {_RERUN}"
+    # a run restored from a summaries table (campaign.restore) holds no dumps, by design
+    restored = bool(prov.get("restored_from"))
     for table in TABLES:
         path = folder / f"{table}.parquet"
         if not path.exists():
-            if table in REQUIRED_TABLES:
+            if table in REQUIRED_TABLES and not restored:
                 return "missing_table", f"{path}: missing from a finished folder; fix: {_RERUN}"
             continue
         try:
@@ -379,7 +383,9 @@ class CampaignStore:
         return self.root / case_id
 
     def folder_ids(self) -> list[str]:
-        return sorted(p.name for p in self.root.iterdir() if p.is_dir() and (p / CASE_JSON).exists())
+        # (hidden folders are not cases: .superseded/, a restore's .<id>.restoring)
+        return sorted(p.name for p in self.root.iterdir()
+                      if p.is_dir() and not p.name.startswith(".") and (p / CASE_JSON).exists())
 
     # ---- index -----------------------------------------------------------------------------
     def rebuild(self) -> int:

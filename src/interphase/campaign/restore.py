@@ -1,0 +1,128 @@
+"""Finished runs brought back from a committed summaries table (`campaign run --restore FILE`).
+
+A campaign longer than one machine's life (a laptop, a CI box, a session on a fresh machine) keeps
+its results as the small table `campaign report` writes (`tables/summaries.csv`: one row per
+finished run, no dumps). On another machine, `campaign run FILE.toml --restore summaries.csv` turns
+every row whose case id is one of the plan's into a finished case folder, then runs only the rest.
+
+A row is restored only when its case id is a planned case's: the id hashes the canonical inputs,
+the engine and the recipe id (interphase.case.case_id), so a row of other inputs, another engine or
+another recipe version is never taken for this campaign's result; those rows are counted and named,
+never used. A case that already has a folder here (finished, failed or under way) is left alone.
+
+A restored folder holds case.json (the plan's inputs and metadata; provenance from the row: engine
+build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields) and DONE. It
+has no dumps, so per-run curves, force networks and animations are not available for it (the
+report says so); every number of the report's tables and fits comes from the summaries and is.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from interphase.campaign import store as st
+from interphase.errors import InputError
+
+#: columns of the summaries table that are not the run's summary: the report's run columns, its
+#: derived efficiency and the index's bookkeeping (the Case parameters are dropped by name per case)
+_NOT_SUMMARY = {"case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
+                "pair_id", "efficiency", "elapsed", "recipe_id", "engine_version", "engine", "role", "status",
+                "cause", "message", "started", "finished", "attempts", "host", "slurm_job", "updated"}
+
+
+@dataclass
+class Restored:
+    """What `restore_runs` did: ids restored, rows of no planned case, planned ids kept as they were."""
+
+    source: Path
+    restored: list[str] = field(default_factory=list)
+    foreign: int = 0                 # rows whose id is no planned case (other inputs, engine or recipe)
+    kept: list[str] = field(default_factory=list)   # planned ids in the table whose folder exists here
+
+
+def read_record(path: str | Path) -> pd.DataFrame:
+    """The summaries table, with a clear error when it is not one."""
+    path = Path(path)
+    try:
+        df = pd.read_csv(path, dtype={"case_id": str, "pair_id": str, "recipe_id": str})
+    except FileNotFoundError:
+        raise InputError(f"no such file {str(path)!r}", where="--restore",
+                         fix="give the summaries table a `campaign report` wrote (report/tables/summaries.csv) "
+                             "or its committed copy") from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path}: does not read as CSV ({exc})", where="--restore",
+                         fix="give the summaries table a `campaign report` wrote") from None
+    missing = [c for c in ("case_id", "recipe_id") if c not in df.columns]
+    if missing:
+        raise InputError(f"{path}: no {', '.join(repr(c) for c in missing)} column: not a summaries table",
+                         where="--restore", fix="give the summaries table a `campaign report` wrote "
+                                                "(report/tables/summaries.csv)")
+    dup = df["case_id"][df["case_id"].duplicated()]
+    if len(dup):
+        raise InputError(f"{path}: case id {dup.iloc[0]} appears more than once", where="--restore",
+                         fix="keep one row per case id (the table `campaign report` writes has one)")
+    return df
+
+
+def _scalar(v):
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    return v.item() if hasattr(v, "item") else v
+
+
+def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_name: str = "") -> Restored:
+    """Write a finished folder for every planned case whose id is a row of the summaries table at
+    `path` and that has no folder here. The caller holds the campaign lock."""
+    path = Path(path)
+    df = read_record(path)
+    by_id = {p.case_id: p for p in planned}
+    out = Restored(path.resolve())
+    out.foreign = int((~df["case_id"].isin(by_id)).sum())
+    now = time.time()
+    for row in df[df["case_id"].isin(by_id)].to_dict("records"):
+        p = by_id[row["case_id"]]
+        folder = store.case_folder(p.case_id)
+        if folder.exists():
+            out.kept.append(p.case_id)
+            continue
+        if str(row["recipe_id"]) != p.recipe_id:   # an id collision would be a hashing bug: refuse loudly
+            raise InputError(f"{path}: case {p.case_id} has recipe {row['recipe_id']}, the plan {p.recipe_id}",
+                             where="--restore", fix="report this: a case id must fix its recipe")
+        summary = {k: _scalar(v) for k, v in row.items() if k not in _NOT_SUMMARY and k not in p.params}
+        elapsed = _scalar(row.get("elapsed"))
+        tmp = folder.with_name(f".{folder.name}.restoring")
+        tmp.mkdir(parents=True, exist_ok=True)
+        meta = {**p.meta(campaign_name), "inputs": p.case.canonical(), "name": p.case.name,
+                "provenance": {"recipe_id": p.recipe_id, "engine_version": _scalar(row.get("engine_version")),
+                               "restored_from": str(out.source), "restored": now},
+                "started": None, "finished": None, "elapsed": elapsed, "status": "done"}
+        st.write_json_atomic(tmp / st.CASE_JSON, meta)
+        st.write_json_atomic(tmp / st.SUMMARY_JSON, {"row": summary})
+        st.append_attempt(tmp, {"event": "restored", "status": "done", "time": now, "source": str(out.source)})
+        st.mark_done(tmp)
+        # a whole folder or none: a restore cut short leaves only a hidden .restoring folder
+        tmp.rename(folder)
+        out.restored.append(p.case_id)
+    return out
+
+
+def is_restored(meta: dict) -> bool:
+    """Whether a case.json is of a restored run (no dumps in its folder, by design)."""
+    prov = meta.get("provenance") if isinstance(meta.get("provenance"), dict) else {}
+    return bool(prov.get("restored_from"))
+
+
+def describe(r: Restored) -> str:
+    text = f"restored {len(r.restored)} finished run(s) from {r.source}"
+    if r.kept:
+        text += f"; {len(r.kept)} already here (kept as they are)"
+    if r.foreign:
+        text += (f"; {r.foreign} row(s) are no case of this plan (other inputs, engine or recipe version: "
+                 "not used)")
+    return text
+
