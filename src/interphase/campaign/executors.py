@@ -201,6 +201,8 @@ class LocalExecutor:
                 t = futures[fut]
                 try:
                     res = fut.result()
+                except (KeyboardInterrupt, Interrupted):
+                    raise            # the campaign's own interruption, not this case's failure
                 except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
                     res = lost_result(t, exc, workers.get(t.case_id))
                 workers.pop(t.case_id, None)

@@ -248,8 +248,11 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
                 # every case after this one would fill the same disk: stop, keep what is finished
                 raise DiskFull(f"the disk is full (case {cid})")
 
-        # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C
+        # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C; and SIGINT always interrupts: a
+        # campaign started in the background of a script inherits SIGINT ignored, while its workers
+        # do act on it (executors._local_task), which would stop their cases and run on with the rest
         old = signal.signal(signal.SIGTERM, _sigterm)
+        old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
         try:
             with progress:
                 ex.run(tasks, on_event)
@@ -263,6 +266,7 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
                   "finished ones are kept. Run the same command again to go on.", file=stream, flush=True)
         finally:
             signal.signal(signal.SIGTERM, old)
+            signal.signal(signal.SIGINT, old_int)
             try:
                 store.reconcile([p.case_id for p in todo], stale_running=True)
             except sqlite3.OperationalError as exc:
