@@ -14,9 +14,11 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from conftest import need_binary  # noqa: E402
 
+from interphase.analysis.ensemble import physical_case  # noqa: E402
 from interphase.campaign.store import CampaignStore  # noqa: E402
 from interphase.cli import main  # noqa: E402
-from interphase.report.build import open_campaign, write_summaries  # noqa: E402
+from interphase.report.build import open_campaign, write_curves, write_summaries  # noqa: E402
+from interphase.report.ensembles import ensemble_table  # noqa: E402
 
 pytestmark = pytest.mark.liggghts
 
@@ -38,6 +40,9 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     _, store, original = open_campaign(quick_campaign)
     store.close()
     record = write_summaries(original, tmp_path / "summaries.csv")
+    with CampaignStore(quick_campaign.parent / "runs") as st:
+        assert write_curves(original, st, tmp_path / "curves.parquet") is not None
+        before = ensemble_table(original, st).set_index("case")
     # one interface run did not make it into the record: it, and only it, runs here
     table = pd.read_csv(record, dtype={"case_id": str})
     lost = table[table["test"] == "interface"].iloc[0]
@@ -49,7 +54,7 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     toml = _elsewhere(quick_campaign, tmp_path)
     assert main(["run", str(toml), "--restore", str(record), "--plain"]) == 0
     out = capsys.readouterr().out
-    assert f"restored {len(original) - 1} finished run(s)" in out and "1 row(s) are no case of this plan" in out
+    assert f"restored {len(original) - 1} finished run(s)" in out and f"({len(original) - 1} with their curve" in out and "1 row(s) are no case of this plan" in out
     assert "5 finished" in out and "1 to run" in out
     runs = tmp_path / "runs"
     assert _starts(runs / lost["case_id"]) == 1 and (runs / lost["case_id"] / "contacts.parquet").exists()
@@ -76,7 +81,20 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
         x, y = a.loc[restored, col].astype(float), b.loc[restored, col].astype(float)
         np.testing.assert_allclose(y, x, rtol=1e-5, err_msg=col)     # the CSV keeps 6 significant digits
     assert (b["label"] == a["label"]).all() and (b["pair_id"].fillna("") == a["pair_id"].fillna("")).all()
-    # the report runs on the restored campaign; the per-run curves of restored runs are not there
+    # the seed ensembles (tan δ, tan φ, E with intervals) come back from the resampled curves: the
+    # cases the lost run is not part of agree with the original's far inside their intervals
+    with CampaignStore(runs) as st:
+        after = ensemble_table(again, st).set_index("case")
+    lost_case = physical_case(lost["label"])
+    same = [c for c in before.index if c != lost_case]
+    assert same and list(after.index) == list(before.index)
+    for q in ("tan_delta", "tan_phi", "E", "E_cs"):
+        width = (before.loc[same, f"{q}_hi"] - before.loc[same, f"{q}_lo"]).astype(float)
+        # (2 seeds a case here: the bounds swing with t(1) = 12.7 times the sd's change)
+        for col, share in ((q, 0.02), (f"{q}_lo", 0.1), (f"{q}_hi", 0.1)):
+            diff = (after.loc[same, col] - before.loc[same, col]).abs().astype(float)
+            assert (diff <= share * width).all(), (col, diff.max(), width.min())
+    # the report runs on the restored campaign
     assert main(["report", str(toml), "--out", str(tmp_path / "rep"), "--bootstrap", "9"]) == 0
     rep = pd.read_csv(tmp_path / "rep" / "tables" / "summaries.csv", dtype={"case_id": str})
     assert len(rep) == len(original)

@@ -11,9 +11,11 @@ another recipe version is never taken for this campaign's result; those rows are
 never used. A case that already has a folder here (finished, failed or under way) is left alone.
 
 A restored folder holds case.json (the plan's inputs and metadata; provenance from the row: engine
-build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields) and DONE. It
-has no dumps, so per-run curves, force networks and animations are not available for it (the
-report says so); every number of the report's tables and fits comes from the summaries and is.
+build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields), DONE, and,
+when the report's `curves.parquet` lies beside the table, series.parquet with the run's stress-ratio
+curve (shear_disp, stress_ratio): the seed ensembles' tan δ, tan φ and E are made from those curves
+(report.ensembles), so a restored run without one counts in every table but those. It has no dumps:
+force networks and animations are not available for it.
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ class Restored:
     restored: list[str] = field(default_factory=list)
     foreign: int = 0                 # rows whose id is no planned case (other inputs, engine or recipe)
     kept: list[str] = field(default_factory=list)   # planned ids in the table whose folder exists here
+    curves: int = 0                  # restored runs that got their curve back (curves.parquet)
 
 
 def read_record(path: str | Path) -> pd.DataFrame:
@@ -69,6 +72,24 @@ def read_record(path: str | Path) -> pd.DataFrame:
     return df
 
 
+#: the report's curves table, looked for beside the summaries table (report.build.write_curves)
+CURVES = "curves.parquet"
+
+
+def _curves(path: Path) -> dict[str, pd.DataFrame]:
+    """{case_id: (shear_disp, stress_ratio) frame} of a curves table; {} when there is none."""
+    if not path.exists():
+        return {}
+    try:
+        df = pd.read_parquet(path, columns=["case_id", "shear_disp", "stress_ratio"])
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputError(f"{path}: does not read as the report's curves table ({exc})", where="--restore",
+                         fix="copy report/tables/curves.parquet beside the summaries table, or remove it") from None
+    df["case_id"] = df["case_id"].astype(str)
+    return {cid: g[["shear_disp", "stress_ratio"]].astype(float).reset_index(drop=True)
+            for cid, g in df.groupby("case_id", sort=False)}
+
+
 def _scalar(v):
     if isinstance(v, float) and math.isnan(v):
         return None
@@ -84,6 +105,7 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
     out = Restored(path.resolve())
     out.foreign = int((~df["case_id"].isin(by_id)).sum())
     now = time.time()
+    curves = _curves(path.with_name(CURVES))
     for row in df[df["case_id"].isin(by_id)].to_dict("records"):
         p = by_id[row["case_id"]]
         folder = store.case_folder(p.case_id)
@@ -103,6 +125,9 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
                 "started": None, "finished": None, "elapsed": elapsed, "status": "done"}
         st.write_json_atomic(tmp / st.CASE_JSON, meta)
         st.write_json_atomic(tmp / st.SUMMARY_JSON, {"row": summary})
+        if p.case_id in curves:
+            curves[p.case_id].to_parquet(tmp / "series.parquet", index=False)
+            out.curves += 1
         st.append_attempt(tmp, {"event": "restored", "status": "done", "time": now, "source": str(out.source)})
         st.mark_done(tmp)
         # a whole folder or none: a restore cut short leaves only a hidden .restoring folder
@@ -119,6 +144,8 @@ def is_restored(meta: dict) -> bool:
 
 def describe(r: Restored) -> str:
     text = f"restored {len(r.restored)} finished run(s) from {r.source}"
+    if r.restored:
+        text += f" ({r.curves} with their curve from {CURVES})"
     if r.kept:
         text += f"; {len(r.kept)} already here (kept as they are)"
     if r.foreign:

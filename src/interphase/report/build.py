@@ -230,6 +230,40 @@ def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
     return path
 
 
+#: points per run in curves.parquet: 200 over a 6 mm shear is one per 0.03 mm, 12 per peak window
+#: (PEAK_WINDOW_D50 × D50 at D50 0.7 mm); the ensembles' tan δ, tan φ and E from them differ from the
+#: full curves' by far less than their intervals (docs/campaigns.md, `--restore`)
+CURVE_POINTS = 200
+
+
+def write_curves(summaries: pd.DataFrame, store, path: Path, points: int = CURVE_POINTS) -> Path | None:
+    """Every finished run's stress-ratio curve (series.parquet: shear_disp [m], stress_ratio [-]),
+    resampled linearly to `points` evenly spaced displacements between its first and last sample,
+    as one long Parquet table (case_id, shear_disp, stress_ratio; float32): with summaries.csv, what
+    a campaign needs to rebuild its seed ensembles on another machine (`campaign run --restore`).
+    None when no run has a curve."""
+    frames = []
+    for cid in summaries["case_id"].astype(str):
+        got = store.curve(cid) if store is not None else None
+        if got is None:
+            continue
+        x, r = (np.asarray(a, float) for a in got)
+        ok = np.isfinite(x) & np.isfinite(r)
+        if ok.sum() < 2:
+            continue
+        order = np.argsort(x[ok], kind="stable")
+        x, r = x[ok][order], r[ok][order]
+        grid = np.linspace(x[0], x[-1], points)
+        frames.append(pd.DataFrame({"case_id": cid, "shear_disp": grid.astype(np.float32),
+                                    "stress_ratio": np.interp(grid, x, r).astype(np.float32)}))
+    if not frames:
+        return None
+    df = pd.concat(frames, ignore_index=True)
+    df["case_id"] = df["case_id"].astype("category")
+    df.to_parquet(path, index=False, compression="zstd")
+    return path
+
+
 def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=None, store=None,
                           lab: str | Path | None = None, n_boot: int = 199, seed: int = 0,
                           title: str | None = None) -> ReportResult:
@@ -261,6 +295,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
 
     if len(summaries):
         res.files.append(write_summaries(summaries, tdir / "summaries.csv"))
+        curves = write_curves(summaries, store, tdir / "curves.parquet")
+        if curves is not None:
+            res.files.append(curves)
     chain = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
     if chain.theta_r or chain.ratio is not None or chain.efficiency is not None:
         res.files.append(write_criterion(chain, points, out / "criterion.json", prov))
