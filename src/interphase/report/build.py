@@ -321,6 +321,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         shown = checks[list(CHECK_COLUMNS)].rename(columns=CHECK_COLUMNS)
         tables.append(T.Table("criterion_check", "The criterion θa → θr → E against every simulated case",
                               shown, check_notes(checks)))
+    tables += T.findings_tables(points)
     if lab_df is not None:
         from interphase.report.lab import compare
 

@@ -180,6 +180,34 @@ def ensembles_table(df: pd.DataFrame) -> Table:
                       "seeds' peak-snapshot θr at the surface (ψ, degrees from vertical), t interval."])
 
 
+def findings_tables(points: pd.DataFrame) -> list[Table]:
+    """The cross-group findings (analysis.findings) that the points can answer: the > 92° filter
+    (Fig. 6.7), Rnc's uniqueness (Fig. 6.5), Group 2's θa by spacing. None without Group 1."""
+    from interphase.analysis import findings as F
+
+    if points.empty or "group" not in points or not (points["group"] == F.REFERENCE).any():
+        return []
+    ref = ("Reference: the bilinear (plateau) line fitted to Group 1's regular saw-teeth at each friction; "
+           "rms, mean and largest residual of each group's physical cases (seed means) about it. A group on "
+           "the line scatters like Group 1 itself.")
+    out = []
+    fc = F.filter_collapse(points)
+    if len(fc):
+        out.append(Table("finding_filter_collapse", "Fig. 6.7: tan δ about Group 1's line against θa, all normals "
+                         "(≥ 90°) and flat ones left out (> 92°)", fc,
+                         [ref, "The study: Groups 2 and 5 leave the line with ≥ 90° and join it with > 92°."]))
+    rn = F.rnc_uniqueness(points)
+    if len(rn):
+        out.append(Table("finding_rnc", "Fig. 6.5: E about Group 1's line against Rnc(D50), and against θa (> 92°)",
+                         rn, [ref, "The study: Rnc gives no unique correlation (Groups 2, 4, 5 deviate)."]))
+    sp = F.spaced_theta_a(points)
+    if len(sp):
+        out.append(Table("finding_spaced_theta_a", "Group 2: θa by flat spacing Sr/D50, with tan δ and θr per "
+                         "friction", sp, ["θa from the particle-centroid trace (D50), degrees from vertical; "
+                                          "the study: θa (> 92°) ≈ 42° whatever Sr."]))
+    return out
+
+
 def results_tables(points: pd.DataFrame) -> list[Table]:
     """One results table per group, one row per physical case (SeedEnsemble.points: seed means; angles
     ψ in degrees; θa = 0 for non-dilative), with its seed count and the 95 % intervals of tan δ, E
