@@ -442,29 +442,24 @@ SHARED = ("group", "friction_ps", "gradation", "profile_kind", "flat_spaced", "n
 SEED_INVARIANT = frozenset({"theta_a_deg_92", "theta_a_deg_90", "theta_a_ccw_deg_90", "rnc", "rn"})
 
 
-def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per code 0..k−1: mean of the finite values, the 95 % Student-t interval of that mean (NaN below
-    two values; the formula of analysis.ensemble.t_interval) and the count."""
+def _group_sd(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per code 0..k−1: mean, sample sd (NaN below two values) and count of the finite values."""
     ok = np.isfinite(values)
     n = np.bincount(codes[ok], minlength=k).astype(float)
     s = np.bincount(codes[ok], weights=values[ok], minlength=k)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = s / n
         dev = np.where(ok, values - mean[codes], 0.0)
-        var = np.bincount(codes, weights=dev * dev, minlength=k) / (n - 1)
-        half = stats.t.ppf(0.975, np.maximum(n - 1, 1)) * np.sqrt(var) / np.sqrt(n)
-    half = np.where(n >= 2, half, np.nan)
-    return mean, mean - half, mean + half, n
-
-
-def _group_sd(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per code 0..k−1: mean, sample sd (NaN below two values) and count of the finite values."""
-    mean, _, _, n = _group_t(values, codes, k)
-    ok = np.isfinite(values)
-    dev = np.where(ok, values - mean[codes], 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.bincount(codes, weights=dev * dev, minlength=k) / (n - 1))
     return mean, np.where(n >= 2, sd, np.nan), n
+
+
+def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per code 0..k−1: mean of the finite values, the 95 % Student-t interval of that mean (NaN below
+    two values; the formula of analysis.ensemble.t_interval) and the count."""
+    mean, sd, n = _group_sd(values, codes, k)
+    half = stats.t.ppf(0.975, np.maximum(n - 1, 1)) * sd / np.sqrt(np.maximum(n, 1))
+    return mean, mean - half, mean + half, n
 
 
 def _padded(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
