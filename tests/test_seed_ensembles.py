@@ -254,3 +254,18 @@ def test_real_results_table_is_per_physical_case(quick_ensemble):
     assert len(t.df) == len(table) and (t.df["seeds"] == 2).all()
     assert t.df["E 95%"].str.match(r"^\[[-0-9.e]+, [-0-9.e]+\]$").all()
     assert f"{len(table)} physical cases, {2 * len(table)} runs" in t.title
+
+
+def test_seed_bootstrap_gives_the_mean_its_full_variance():
+    """Resampling 3 seeds with replacement makes the mean vary by s²·(2/3)/3; the replicates restore
+    s²/3 (adjusted bootstrap), so fit bands are not a fifth too narrow."""
+    from interphase.analysis.correlations import _draw_means
+
+    rng = np.random.default_rng(1)
+    mat = np.array([[1.0, 2.0, 4.0], [0.5, 0.5, np.nan]])
+    n = np.array([3, 2])
+    draws = _draw_means(mat, n, rng, 40000)
+    s2 = np.var(mat[0], ddof=1)
+    assert np.var(draws[:, 0]) == pytest.approx(s2 / 3, rel=0.03)
+    assert np.mean(draws[:, 0]) == pytest.approx(mat[0].mean(), abs=0.01)
+    assert np.all(draws[:, 1] == 0.5)                   # no scatter, nothing to inflate

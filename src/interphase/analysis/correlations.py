@@ -474,8 +474,20 @@ def _padded(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, 
     return mat, n
 
 
+def _inflate(drawn: np.ndarray, mat: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Bootstrap means (n_boot, k) moved away from each row's own mean by √(n/(n − 1)): a mean of n
+    values drawn with replacement varies by s²(n − 1)/n², not s²/n (a third too little at n = 3);
+    scaling its deviation restores the variance of the mean (the adjusted bootstrap)."""
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        centre = np.nanmean(mat, axis=1)
+        factor = np.where(n >= 2, np.sqrt(n / np.maximum(n - 1, 1)), 1.0)
+    return centre[None, :] + factor[None, :] * (drawn - centre[None, :])
+
+
 def _draw_means(mat: np.ndarray, n: np.ndarray, rng, n_boot: int) -> np.ndarray:
-    """(n_boot, k): each row's mean over n[row] of its values drawn with replacement."""
+    """(n_boot, k): each row's mean over n[row] of its values drawn with replacement, its spread
+    about the row's mean restored to s²/n (`_inflate`)."""
     k, width = mat.shape
     idx = np.floor(rng.random((n_boot, k, width)) * n[None, :, None]).astype(int)
     idx = np.minimum(idx, np.maximum(n - 1, 0)[None, :, None])
@@ -483,7 +495,7 @@ def _draw_means(mat: np.ndarray, n: np.ndarray, rng, n_boot: int) -> np.ndarray:
     vals = np.where(np.arange(width)[None, None, :] < n[None, :, None], vals, np.nan)
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return np.nanmean(vals, axis=2)
+        return _inflate(np.nanmean(vals, axis=2), mat, n)
 
 
 @dataclass
@@ -511,8 +523,8 @@ class SeedEnsemble:
     def replicates(self, columns, n_boot: int, seed: int = 0) -> dict[str, np.ndarray]:
         """{column: (n_boot, K) seed-bootstrap values of the per-case points}. Each replicate draws every
         physical case's runs with replacement (as many as it has) and every box ensemble's seeds, once
-        for all columns (common random numbers across the correlations); means as in `points`, E as
-        the ratio of the drawn means."""
+        for all columns (common random numbers across the correlations); means as in `points`, their
+        spread about the case's mean restored to s²/n (`_inflate`), E as the ratio of the drawn means."""
         key = (n_boot, seed)
         if key not in self._cache:
             rng = np.random.default_rng(seed)
@@ -533,7 +545,7 @@ class SeedEnsemble:
                 v = np.where(live, m[np.arange(k)[None, :, None], idx], np.nan)
                 with np.errstate(invalid="ignore"), warnings.catch_warnings():
                     warnings.simplefilter("ignore", RuntimeWarning)
-                    out[c] = np.nanmean(v, axis=2)
+                    out[c] = _inflate(np.nanmean(v, axis=2), m, np.isfinite(m).sum(axis=1))
             box = (_draw_means(self.box_values, self.box_counts, rng, n_boot) if self.box_counts.size
                    else np.zeros((n_boot, 0)))
             tan_phi = np.where(self.box_of_case[None, :] >= 0, box[:, np.maximum(self.box_of_case, 0)]
