@@ -28,7 +28,7 @@ import numpy as np
 
 from interphase.case import Case
 from interphase.engines.packing import Packing, lattice_packing
-from interphase.material import rayleigh_time
+from interphase.material import rayleigh_time, youngs_modulus
 from interphase.recipe import RECIPE, Recipe, RunRecord, Steps
 
 Segment = tuple[float, float, float, float]
@@ -95,6 +95,23 @@ class Device:
         """The fastest the platen may move [m/s]: half a skin per two steps, so that no contact
         is missed between neighbour-list builds (LIGGGHTS refuses vel_max ≥ skin/(2·dt))."""
         return 0.5 * self.skin / (2 * self.dt)
+
+    @property
+    def platen_servo(self) -> tuple[float, float]:
+        """(v_max [m/s], saturation [-]) of the platen servo, one law in both engines: the platen moves
+        at v_max × (relative force error) / saturation, capped at ±v_max, down when the grains push
+        less than the target (LIGGGHTS: `servo/vel_max` v_max and `kp` = 1/saturation in proportional
+        mode; YADE: engines.yade_driver.servo_velocity). In-band gain G = 0.1·ratio·r_min/dt per unit
+        error, ratio = servo_gain·(σ/E*)^(2/3) (Hertz, E* = E/(2(1−ν²))): the platen moves the same
+        fraction of the grains' overlap under σ per step at any stiffness (the in-band law of
+        LIGGGHTS' `mode auto ratio`). v_max = G·servo_saturation (also the approach speed), never
+        above the speed limit; not `mode auto`'s tenfold jump, which locked one well-graded packing
+        into a two-step limit cycle (docs/liggghts.md)."""
+        case, r = self.case, self.recipe
+        e_star = youngs_modulus(case.shear_modulus, case.poisson) / (2 * (1 - case.poisson ** 2))
+        ratio = r.servo_gain * (case.normal_stress / e_star) ** (2 / 3)
+        gain = 0.1 * ratio * (case.gradation.d_min / 2) / self.dt
+        return min(gain * r.servo_saturation, self.platen_speed_limit), r.servo_saturation
 
     def record(self, engine: str) -> RunRecord:
         """What recipe.json states about a run of this device by `engine`."""

@@ -26,24 +26,9 @@ from interphase.recipe import FILE as RECIPE_FILE
 from interphase.recipe import read_record
 from interphase.surface.mesh import segment_triangles, stl_text
 
-__all__ = ["Liggghts", "check_grain_balance", "classify", "platen_servo", "time_step"]   # time_step: campaign/plan.py
+__all__ = ["Liggghts", "check_grain_balance", "classify", "time_step"]   # time_step: campaign/plan.py
 
 MESH = {"surface": "surf"}       # fix ids of wall groups whose file name is not their id
-
-
-def platen_servo(dev: Device) -> tuple[float, float]:
-    """(vel_max [m/s], kp) of the platen servo, LIGGGHTS' proportional mode: the platen moves at
-    vel_max·kp × the relative force error, at most vel_max, never above the device's speed limit.
-    Gain: G = 0.1·ratio·r_min/dt per unit error with ratio = servo_gain·(σ/E*)^(2/3) (Hertz,
-    E* = E/(2(1−ν²))): the platen moves the same fraction of the grains' overlap under σ per step at
-    any stiffness (the in-band law of `mode auto ratio`). The speed saturates at G·servo_saturation
-    (also the approach speed), not at `mode auto`'s tenfold jump, which locked one well-graded
-    packing into a two-step limit cycle (docs/liggghts.md)."""
-    case, r = dev.case, dev.recipe
-    e_star = youngs_modulus(case.shear_modulus, case.poisson) / (2 * (1 - case.poisson ** 2))
-    ratio = r.servo_gain * (case.normal_stress / e_star) ** (2 / 3)
-    gain = 0.1 * ratio * (case.gradation.d_min / 2) / dev.dt
-    return min(gain * r.servo_saturation, dev.platen_speed_limit), 1 / r.servo_saturation
 
 
 def mesh_files(dev: Device) -> dict[str, str]:
@@ -64,7 +49,8 @@ def deck_values(dev: Device) -> dict:
     # type pairs (1 grain, 2 surface/lower box, 3 platen, 4 fixed side walls); walls never meet walls
     mu_s = case.friction_ps if case.test == "interface" else case.friction_pw
     grain_with = [case.friction_pp, mu_s, case.friction_pw, case.friction_side]
-    vmax, kp = platen_servo(dev)
+    vmax, saturation = dev.platen_servo
+    kp = 1 / saturation
     lo, hi = dev.platen_band
     moving, fixed = (MESH.get(n, n) for n in dev.wall_names)
     return dict(periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
