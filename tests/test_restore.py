@@ -47,6 +47,10 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     table = pd.read_csv(record, dtype={"case_id": str})
     lost = table[table["test"] == "interface"].iloc[0]
     table[table["case_id"] != lost["case_id"]].to_csv(record, index=False)
+    # a row whose curve the curves table lacks is run again, not restored without it
+    curves = pd.read_parquet(tmp_path / "curves.parquet")
+    no_curve = table[table["test"] == "box"].iloc[0]
+    curves[curves["case_id"].astype(str) != no_curve["case_id"]].to_parquet(tmp_path / "curves.parquet")
     # a row of another campaign (another recipe / inputs) is counted, never used
     foreign = table.iloc[[0]].assign(case_id="0123456789ab")
     pd.concat([pd.read_csv(record, dtype={"case_id": str}), foreign]).to_csv(record, index=False)
@@ -54,12 +58,14 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     toml = _elsewhere(quick_campaign, tmp_path)
     assert main(["run", str(toml), "--restore", str(record), "--plain"]) == 0
     out = capsys.readouterr().out
-    assert f"restored {len(original) - 1} finished run(s)" in out and f"({len(original) - 1} with their curve" in out and "1 row(s) are no case of this plan" in out
-    assert "5 finished" in out and "1 to run" in out
+    assert f"restored {len(original) - 2} finished run(s)" in out and f"({len(original) - 2} with their curve" in out
+    assert "1 row(s) without a curve in curves.parquet are run again" in out and "1 row(s) are no case of this plan" in out
+    assert "4 finished" in out and "2 to run" in out
     runs = tmp_path / "runs"
-    assert _starts(runs / lost["case_id"]) == 1 and (runs / lost["case_id"] / "contacts.parquet").exists()
+    for cid in (lost["case_id"], no_curve["case_id"]):
+        assert _starts(runs / cid) == 1 and (runs / cid / "contacts.parquet").exists()
     for cid in table["case_id"]:
-        if cid != lost["case_id"]:
+        if cid not in (lost["case_id"], no_curve["case_id"]):
             assert _starts(runs / cid) == 0 and not (runs / cid / "contacts.parquet").exists()
             prov = json.loads((runs / cid / "case.json").read_text())["provenance"]
             assert prov["restored_from"] == str(record.resolve())
@@ -76,7 +82,7 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     a = original.set_index("case_id").sort_index()
     b = again.set_index("case_id").sort_index()
     assert list(a.index) == list(b.index)
-    restored = b.index != lost["case_id"]
+    restored = ~b.index.isin([lost["case_id"], no_curve["case_id"]])
     for col in ("peak_stress_ratio", "theta_r_surface_deg", "theta_a_deg_92", "solid_fraction", "n_contacts_surface"):
         x, y = a.loc[restored, col].astype(float), b.loc[restored, col].astype(float)
         np.testing.assert_allclose(y, x, rtol=1e-5, err_msg=col)     # the CSV keeps 6 significant digits
@@ -85,6 +91,7 @@ def test_restored_campaign_reruns_nothing_and_reports_the_same_numbers(quick_cam
     # cases the lost run is not part of agree with the original's far inside their intervals
     with CampaignStore(runs) as st:
         after = ensemble_table(again, st).set_index("case")
+    # (the rerun box test is one of every case's soil tests: compare where the rerun reproduced it)
     lost_case = physical_case(lost["label"])
     same = [c for c in before.index if c != lost_case]
     assert same and list(after.index) == list(before.index)

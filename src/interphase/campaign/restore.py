@@ -14,7 +14,8 @@ A restored folder holds case.json (the plan's inputs and metadata; provenance fr
 build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields), DONE, and,
 when the report's `curves.parquet` lies beside the table, series.parquet with the run's stress-ratio
 curve (shear_disp, stress_ratio): the seed ensembles' tan δ, tan φ and E are made from those curves
-(report.ensembles), so a restored run without one counts in every table but those. It has no dumps:
+(report.ensembles). With a curves table, a row whose curve it lacks is not restored but run again
+(it could not join its ensemble); without one, rows are restored without curves. It has no dumps:
 force networks and animations are not available for it.
 """
 
@@ -46,6 +47,7 @@ class Restored:
     foreign: int = 0                 # rows whose id is no planned case (other inputs, engine or recipe)
     kept: list[str] = field(default_factory=list)   # planned ids in the table whose folder exists here
     curves: int = 0                  # restored runs that got their curve back (curves.parquet)
+    no_curve: list[str] = field(default_factory=list)   # rows left to run: the curves table lacks them
 
 
 def read_record(path: str | Path) -> pd.DataFrame:
@@ -112,6 +114,10 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
         if folder.exists():
             out.kept.append(p.case_id)
             continue
+        if curves and p.case_id not in curves:
+            # a run the table keeps without its curve cannot join its seed ensemble: run it again
+            out.no_curve.append(p.case_id)
+            continue
         if str(row["recipe_id"]) != p.recipe_id:   # an id collision would be a hashing bug: refuse loudly
             raise InputError(f"{path}: case {p.case_id} has recipe {row['recipe_id']}, the plan {p.recipe_id}",
                              where="--restore", fix="report this: a case id must fix its recipe")
@@ -146,6 +152,8 @@ def describe(r: Restored) -> str:
     text = f"restored {len(r.restored)} finished run(s) from {r.source}"
     if r.restored:
         text += f" ({r.curves} with their curve from {CURVES})"
+    if r.no_curve:
+        text += f"; {len(r.no_curve)} row(s) without a curve in {CURVES} are run again"
     if r.kept:
         text += f"; {len(r.kept)} already here (kept as they are)"
     if r.foreign:
