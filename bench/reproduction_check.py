@@ -15,6 +15,7 @@ import sys
 import numpy as np
 import pandas as pd
 
+from interphase.campaign.restore import is_restored
 from interphase.report.build import open_campaign
 
 ROUNDING = 1e-5      # the table's float_format %.6g: relative error up to 5e-6
@@ -24,8 +25,7 @@ def main(campaign: str, table: str) -> None:
     _, store, here = open_campaign(campaign)
     try:
         ran = [cid for cid in here["case_id"].astype(str)
-               if not (json.loads((store.case_folder(cid) / "case.json").read_text()).get("provenance") or {})
-               .get("restored_from")]
+               if not is_restored(json.loads((store.case_folder(cid) / "case.json").read_text()))]
     finally:
         store.close()
     old = pd.read_csv(table, dtype={"case_id": str}).set_index("case_id")

@@ -22,6 +22,7 @@ force networks and animations are not available for it.
 from __future__ import annotations
 
 import math
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -124,7 +125,8 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
         summary = {k: _scalar(v) for k, v in row.items() if k not in _NOT_SUMMARY and k not in p.params}
         elapsed = _scalar(row.get("elapsed"))
         tmp = folder.with_name(f".{folder.name}.restoring")
-        tmp.mkdir(parents=True, exist_ok=True)
+        shutil.rmtree(tmp, ignore_errors=True)      # what a restore cut short left
+        tmp.mkdir(parents=True)
         meta = {**p.meta(campaign_name), "inputs": p.case.canonical(), "name": p.case.name,
                 "provenance": {"recipe_id": p.recipe_id, "engine_version": _scalar(row.get("engine_version")),
                                "restored_from": str(out.source), "restored": now},
