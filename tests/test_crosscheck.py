@@ -159,6 +159,8 @@ def test_pairing_removes_the_packing_scatter():
     r = _row(_runs(lig, yad))
     assert r.verdict == "agree" and pd.isna(r.seeds_needed)
     assert difference(lig, yad, r.tolerance, paired=False).verdict == "undecided"
+    assert r.pair_r > 0.99                       # what the pairing bought: the table shows it
+    assert "| +1.00 |" in _report(_runs(lig, yad)).markdown()
 
 
 def test_undecided_says_how_many_seeds_would_decide():
