@@ -128,4 +128,12 @@ def test_dry_run_lists_what_would_be_restored(quick_campaign, tmp_path, capsys):
     assert main(["run", str(toml), "--restore", str(record), "--dry-run"]) == 0
     out = capsys.readouterr().out
     assert out.count("  restore  ") == len(original)
+    # with a curves table, a row without its curve would run
+    with CampaignStore(quick_campaign.parent / "runs") as st:
+        curves = pd.read_parquet(write_curves(original, st, tmp_path / "curves.parquet"))
+    first = str(curves["case_id"].iloc[0])
+    curves[curves["case_id"].astype(str) != first].to_parquet(tmp_path / "curves.parquet")
+    assert main(["run", str(toml), "--restore", str(record), "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("  restore  ") == len(original) - 1 and f"  run           {first}" in out
     assert not any((tmp_path / "runs").glob("*/DONE"))

@@ -93,6 +93,17 @@ def _curves(path: Path) -> dict[str, pd.DataFrame]:
             for cid, g in df.groupby("case_id", sort=False)}
 
 
+def restorable_ids(path: str | Path) -> set[str]:
+    """The case ids of a summaries table that `restore_runs` would restore (a plan and a folder
+    permitting): every row, or with a curves table beside it only the rows it has a curve of."""
+    path = Path(path)
+    ids = set(read_record(path)["case_id"])
+    curves = path.with_name(CURVES)
+    if curves.exists():
+        ids &= set(pd.read_parquet(curves, columns=["case_id"])["case_id"].astype(str))
+    return ids
+
+
 def _scalar(v):
     if isinstance(v, float) and math.isnan(v):
         return None

@@ -296,9 +296,9 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
 
     record = set()
     if restore is not None:
-        from interphase.campaign.restore import read_record
+        from interphase.campaign.restore import restorable_ids
 
-        record = set(read_record(restore)["case_id"])
+        record = restorable_ids(restore)
 
     root = campaign.output / ".dry-run"
     engines = {}
