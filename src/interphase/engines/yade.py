@@ -75,6 +75,7 @@ def driver_input(dev: Device) -> dict:
     case, r, s = dev.case, dev.recipe, dev.steps
     p = dev.packing
     lo, hi = dev.platen_band
+    servo_vmax, servo_band = dev.platen_servo          # LIGGGHTS' law (YADE recipe 3)
     walls = [*zip(dev.wall_names, (dev.moving, dev.fixed)), ("platen", list(dev.platen))]
     return dict(
         version=__version__, test=case.test, dt=dev.dt, gravity=r.gravity,
@@ -83,7 +84,7 @@ def driver_input(dev: Device) -> dict:
         walls=[dict(name=name, index=k, triangles=facets(segs, dev.wall_reach))
                for k, (name, segs) in enumerate(walls) if segs],           # periodic: no fixed group
         platen_force=dev.platen_force, platen_z=dev.platen_com[1], wall_reach=dev.wall_reach,
-        servo_vmax=dev.platen_servo[0], servo_band=dev.platen_servo[1],   # LIGGGHTS' law
+        servo_vmax=servo_vmax, servo_band=servo_band,
         platen_force_lo=lo, platen_force_hi=hi, shear_velocity=case.shear_velocity,
         steps=dict(n_consolidate=s.n_consolidate, n_shear=s.n_shear, n_snapshot=s.n_snapshot, n_history=s.n_history,
                    n_chunk=s.n_chunk, n_chunks_max=s.n_chunks_max),
