@@ -32,11 +32,13 @@ import pandas as pd
 from interphase.campaign import store as st
 from interphase.errors import InputError
 
-#: columns of the summaries table that are not the run's summary: the report's run columns, its
-#: derived efficiency and the index's bookkeeping (the Case parameters are dropped by name per case)
-_NOT_SUMMARY = {"case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
-                "pair_id", "efficiency", "elapsed", "recipe_id", "engine_version", "engine", "role", "status",
-                "cause", "message", "started", "finished", "attempts", "host", "slurm_job", "updated"}
+def _not_summary() -> set[str]:
+    """Columns of the summaries table that are not the run's summary: the report's run columns and
+    bookkeeping (report.build, which writes the table), its derived efficiency and the index's own
+    columns (the Case parameters are dropped by name per case)."""
+    from interphase.report.build import BOOKKEEPING, RUN_COLUMNS
+
+    return {*RUN_COLUMNS, *BOOKKEEPING, *st._COLUMNS, "efficiency"}
 
 
 @dataclass
@@ -120,6 +122,7 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
     out.foreign = int((~df["case_id"].isin(by_id)).sum())
     now = time.time()
     curves = _curves(path.with_name(CURVES))
+    not_summary = _not_summary()
     for row in df[df["case_id"].isin(by_id)].to_dict("records"):
         p = by_id[row["case_id"]]
         folder = store.case_folder(p.case_id)
@@ -133,7 +136,7 @@ def restore_runs(planned, store: st.CampaignStore, path: str | Path, campaign_na
         if str(row["recipe_id"]) != p.recipe_id:   # an id collision would be a hashing bug: refuse loudly
             raise InputError(f"{path}: case {p.case_id} has recipe {row['recipe_id']}, the plan {p.recipe_id}",
                              where="--restore", fix="report this: a case id must fix its recipe")
-        summary = {k: _scalar(v) for k, v in row.items() if k not in _NOT_SUMMARY and k not in p.params}
+        summary = {k: _scalar(v) for k, v in row.items() if k not in not_summary and k not in p.params}
         elapsed = _scalar(row.get("elapsed"))
         tmp = folder.with_name(f".{folder.name}.restoring")
         shutil.rmtree(tmp, ignore_errors=True)      # what a restore cut short left
