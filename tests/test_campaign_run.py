@@ -221,3 +221,32 @@ def test_failed_cases_are_kept_until_rerun_failed(tmp_path):
     assert again.returncode == 1 and "0 to run" in again.stdout and _starts(folder) == 1
     forced = subprocess.run(cmd + ["--rerun-failed"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert forced.returncode == 1 and "1 to run" in forced.stdout and _starts(folder) == 2
+
+
+@pytest.mark.yade
+def test_a_case_waits_for_the_specimen_it_starts_from(tmp_path):
+    """specimen_from: when the LIGGGHTS run fails, its YADE case does not run (no folder, a `wait`
+    line naming the run and its status, exit 1); once the LIGGGHTS run finishes, the next `campaign
+    run` runs the YADE case from its specimen."""
+    need_binary("liggghts")
+    need_binary("yade")
+    f = tmp_path / "pair.toml"
+    f.write_text(CAMPAIGN.replace('engines = ["liggghts"]', 'engines = ["liggghts", "yade"]\nspecimen_from = "liggghts"')
+                 .replace("seed = [1, 2]", "seed = [1]").replace("[0.05, 0.2, 0.5]", "[0.2]")
+                 .replace("[case]\n", '[case]\ndevice = "periodic"\nshear_velocity = 0.05\n')
+                 .replace("shear_velocity = 0.01\n", ""))
+    cmd = [sys.executable, "-m", "interphase.cli", "run", str(f), "--plain"]
+    env = dict(os.environ, INTERPHASE_LIGGGHTS_BINARY=str(tmp_path / "no-liggghts"))
+    first = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)
+    assert first.returncode == 1, first.stdout + first.stderr
+    (lig,) = _folders(tmp_path / "out")
+    assert json.loads((lig / "failure.json").read_text())["cause"] == "not_installed"
+    wait = [ln for ln in first.stdout.splitlines() if ln.startswith("wait ")]
+    assert len(wait) == 1 and f"the liggghts run it starts from, {lig.name}, is failed" in wait[0], first.stdout
+    second = subprocess.run(cmd + ["--rerun-failed"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 0, second.stdout + second.stderr
+    folders = _folders(tmp_path / "out")
+    assert len(folders) == 2 and all(folder_status(p) == "done" for p in folders)
+    (yade,) = [p for p in folders if p != lig]
+    assert json.loads((yade / "case.json").read_text())["inputs"]["start"] == {"engine": "liggghts",
+                                                                                "case_id": lig.name}

@@ -44,6 +44,8 @@ BAD_FILES = {
     "negative_jobs.toml": (5, "jobs"),
     "bad_profile_param.toml": (8, "height"),
     "bad_box_seeds.toml": (8, "pairs.seeds"),
+    "bad_specimen_from.toml": (4, "specimen_from"),
+    "start_in_case.toml": (7, "specimen_from"),
 }
 
 
@@ -253,3 +255,53 @@ def test_a_box_case_is_one_test_however_declared():
     declared = Case(test="box", friction_ps=0.2, friction_pw=0.9)
     assert declared.friction_ps == 0.9 and declared.label() == plain.label() and "mu0.9" in plain.label()
     assert case_id(declared, "liggghts", "r") == case_id(plain, "liggghts", "r")
+
+
+SAME_SPECIMEN = """\
+[campaign]
+name = "xc"
+engines = ["yade", "liggghts"]
+specimen_from = "liggghts"
+
+[case]
+test = "interface"
+device = "periodic"
+profile = {kind = "flat"}
+n_grains = 60
+box_length_d50 = 12.0
+
+[sweep]
+seed = [1, 2]
+
+[pairs]
+box = false
+"""
+
+
+def test_specimen_from_starts_the_other_engine_from_the_source_run(tmp_path, capsys):
+    """With specimen_from, every YADE case starts from the LIGGGHTS run of the same case: its id hashes
+    that run's id (known before anything runs), the LIGGGHTS ids are those of a campaign without it,
+    the LIGGGHTS cases come first, and a dry run lists a YADE case whose specimen is not made yet
+    without rendering it."""
+    f = tmp_path / "xc.toml"
+    f.write_text(SAME_SPECIMEN)
+    c = load_campaign(f, output=tmp_path / "out")
+    assert c.specimen_from == "liggghts"
+    planned = plan(c, identity=lambda name: FAKE_ID + name)
+    assert [p.engine for p in planned] == ["liggghts"] * 2 + ["yade"] * 2
+    lig = {p.label: p for p in planned if p.engine == "liggghts"}
+    f.write_text(SAME_SPECIMEN.replace('specimen_from = "liggghts"\n', ""))
+    plain = plan(load_campaign(f, output=tmp_path / "out"), identity=lambda name: FAKE_ID + name)
+    assert {p.case_id for p in plain if p.engine == "liggghts"} == {p.case_id for p in lig.values()}
+    own = {p.label: p.case_id for p in plain if p.engine == "yade"}
+    for p in planned:
+        if p.engine == "yade":
+            src = lig[p.label]
+            assert p.case.start.case_id == src.case_id and p.case.start.engine == "liggghts"
+            assert p.case.start.folder == str(tmp_path / "out" / src.case_id)
+            assert p.case_id != own[p.label] and p.params["start"] == f"liggghts:{src.case_id}"
+            assert p.case.replace(start=None) == src.case          # the same physical case
+    f.write_text(SAME_SPECIMEN)
+    assert main(["run", str(f), "--output", str(tmp_path / "out"), "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("starts from liggghts:") == 2 and out.count("files;") == 2

@@ -29,6 +29,25 @@ WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each s
 
 
 @dataclass(frozen=True)
+class Start:
+    """A case that starts from the specimen another engine's run of the same case consolidated (the
+    cross-check's same-specimen protocol, docs/crosscheck.md): that run's grains at the start of its
+    shear and its platen height there replace the lattice and the platen (engines/device.py); the
+    engine then consolidates for its first stretch and shears as usual. Its identity is the source
+    run's engine and case id; `folder` is only where that run lies."""
+
+    engine: str
+    case_id: str
+    folder: str = field(default="", compare=False)
+
+    def canonical(self) -> dict:
+        return {"engine": self.engine, "case_id": self.case_id}
+
+    def label(self) -> str:
+        return f"{self.engine}:{self.case_id}"
+
+
+@dataclass(frozen=True)
 class Case:
     test: str = "interface"                 # "interface" | "box"
     profile: ProfileSpec | None = None      # required for interface tests, None for box tests
@@ -55,6 +74,9 @@ class Case:
     device: str = "walled"                  # "walled": soil box between side walls (the study's);
                                             # "periodic": x periodic over the box length, no side walls
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
+    start: Start | None = None              # None: the engine's own lattice and consolidation; else
+                                            # another run's consolidated specimen (set by the plan,
+                                            # [campaign] specimen_from; never in a [case] table)
 
     def __post_init__(self):
         def bad(fld, msg, fix=None):
@@ -74,6 +96,8 @@ class Case:
             object.__setattr__(self, "friction_ps", self.friction_pw)
         if not isinstance(self.gradation, Gradation):
             bad("gradation", "gradation must be a Gradation")
+        if self.start is not None and not isinstance(self.start, Start):
+            bad("start", f"must be a Start or None, got {self.start!r}", "set it with [campaign] specimen_from")
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
                     "snapshot_every", "box_length_d50", "box_height_d50")
         nonneg = ("friction_pp", "friction_ps", "friction_pw", "friction_side", "rolling_friction")
@@ -190,7 +214,9 @@ class Case:
             if not f.compare:
                 continue
             v = getattr(self, f.name)
-            if isinstance(v, (ProfileSpec, Gradation)):
+            if f.name == "start" and v is None:
+                continue            # the usual start: no key, so every case id without one stays as it was
+            if isinstance(v, (ProfileSpec, Gradation, Start)):
                 v = v.canonical()
             elif isinstance(v, float):
                 v = float(repr(v))
@@ -222,6 +248,10 @@ def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
 
 
+#: Case fields the plan sets, never a campaign's [case] table
+PLANNED_FIELDS = ("start",)
+
+
 def _did_you_mean(key: str, allowed) -> str:
     import difflib
 
@@ -250,9 +280,12 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     """
     from pathlib import Path
 
-    fields = {f.name: f for f in dataclasses.fields(Case)}
+    fields = {f.name: f for f in dataclasses.fields(Case) if f.name not in PLANNED_FIELDS}
     kwargs = {}
     for key, value in data.items():
+        if key in PLANNED_FIELDS:
+            raise InputError(f"{key!r} is not set in a case table", where=where,
+                             fix='a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"')
         if key not in fields:
             raise InputError(f"unknown key {key!r}", where=where, fix=_did_you_mean(key, fields))
         kwargs[key] = value

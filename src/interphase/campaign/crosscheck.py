@@ -21,7 +21,9 @@ so every other line keeps its number in error messages):
                                # its metric is reported with its interval
 
 The verdict. A physical case is a case label without its `-s<seed>` suffix; its seeds are the
-packings both engines finished. Per metric, the PAIRED difference YADE − LIGGGHTS (same packing seed)
+packings both engines finished. With `[campaign] specimen_from = "liggghts"` (the standard set) YADE
+shears the very specimen LIGGGHTS consolidated for that seed (interphase.case.Start), so a pair
+differs by the contact law under shear, not by two consolidations. Per metric, the PAIRED difference YADE − LIGGGHTS (same packing seed)
 is averaged over those seeds with its 95 % t interval, and the interval is set against ±tolerance
 (interphase.analysis.difference, paired=True): agree (inside), differ (entirely outside), undecided
 (straddles, or fewer than 2 seeds; `seeds_needed` is the seed count whose interval would decide at

@@ -1,5 +1,9 @@
 """Plan: the campaign's cases × engines → `PlannedCase`s with stable ids, folders and flat parameters.
 
+A campaign with `specimen_from` (the cross-check) gives every other engine's case a `Start` on the
+source engine's run of the same case (interphase.case.Start): its id hashes that run's id, so it
+is known before anything runs, and the source engine's cases come first in the plan.
+
 A case id is `interphase.case.case_id(case, engine, recipe id)`: the same inputs run by the same
 engine and recipe (the engine's number in interphase.recipe.RECIPE_VERSIONS and the Recipe's values) get the same id on
 every machine, with or without the engine installed; a new recipe version gives that engine new ids (and so new
@@ -15,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from interphase.analysis.strength import QUASI_STATIC_I
-from interphase.case import Case, case_id
+from interphase.case import Case, Start, case_id
 from interphase.campaign.schema import Campaign
 from interphase.errors import InputError
 
@@ -66,6 +70,9 @@ def flat_params(case: Case) -> dict:
     for key, value in case.canonical().items():
         if key == "profile":
             continue
+        if key == "start":
+            out["start"] = case.start.label()
+            continue
         if key == "gradation":
             out["gradation"] = value if isinstance(value, str) else "user"
             continue
@@ -97,14 +104,23 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
             raise InputError(f"unknown engine {n!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
     out: list[PlannedCase] = []
     order = sorted(range(len(campaign.cases)), key=lambda i: (campaign.cases[i].role != "box", i))
+    src = campaign.specimen_from
+    starts = {}
+    if src:
+        names = tuple(sorted(names, key=lambda n: n != src))     # the specimens are made first
+        for i, c in enumerate(campaign.cases):
+            sid = case_id(c.case, src, identity(src))
+            starts[i] = Start(src, sid, str(campaign.output / sid))
     for name in names:
         rid = identity(name)
-        ids = {i: case_id(c.case, name, rid) for i, c in enumerate(campaign.cases)}
+        cases = [c.case if name == src or i not in starts else c.case.replace(start=starts[i])
+                 for i, c in enumerate(campaign.cases)]
+        ids = {i: case_id(case, name, rid) for i, case in enumerate(cases)}
         for i in order:
             c = campaign.cases[i]
-            params = flat_params(c.case)
+            params = flat_params(cases[i])
             out.append(PlannedCase(
-                case_id=ids[i], engine=name, case=c.case, group=c.group, role=c.role, label=_label(c.case),
+                case_id=ids[i], engine=name, case=cases[i], group=c.group, role=c.role, label=_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
                 recipe_id=rid, params=params))
     return out

@@ -103,7 +103,7 @@ def find_stale(planned: list[PlannedCase], rows, builds: dict) -> dict[str, Stal
         row = by_id.get(p.case_id)
         status = row.status if row is not None else "pending"
         old = earlier.get((p.label, p.engine))
-        if status == "pending" and old is not None:
+        if status == "pending" and old is not None and old.recipe_id != p.recipe_id:
             out[p.case_id] = Stale("recipe", f"finished under recipe {old.recipe_id} (folder {old.case_id}), not "
                                    f"this version's {p.recipe_id}: kept; `campaign run --rerun-stale` runs it under "
                                    "this recipe", old.case_id)
@@ -255,7 +255,16 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
         try:
             with progress:
-                ex.run(tasks, on_event)
+                for stage in _stages(tasks, campaign.specimen_from):
+                    ready = [t for t in stage if _start_status(t.case) == "done"]
+                    for t in stage:
+                        if _start_status(t.case) != "done":      # its specimen was not made: it stays pending
+                            store.set_status(t.case_id, "pending")
+                            print(f"wait {t.case_id} ({t.meta.get('label')}): the {t.case.start.engine} run it starts "
+                                  f"from, {t.case.start.case_id}, is {_start_status(t.case)}; run the same command "
+                                  "again once it has finished", file=stream, flush=True)
+                    if ready:
+                        ex.run(ready, on_event)
         except DiskFull as exc:
             report.interrupted, report.stopped = True, exc.reason
             print(f"campaign {campaign.name}: stopped: {exc.reason}. Running cases were stopped and recorded, "
@@ -275,6 +284,24 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         for p in todo:
             report.statuses.setdefault(p.case_id, st.folder_status(store.case_folder(p.case_id)))
     return report
+
+
+def _stages(tasks: list[Task], specimen_from: str | None) -> list[list[Task]]:
+    """The tasks in the order they may run: with specimen_from, that engine's runs first (the others
+    start from their specimens), then the rest; else all at once."""
+    if not specimen_from:
+        return [tasks]
+    first = [t for t in tasks if t.engine == specimen_from]
+    return [s for s in (first, [t for t in tasks if t.engine != specimen_from]) if s]
+
+
+def _start_status(case) -> str:
+    """'done' when the case starts from its engine's own lattice or from a finished run, else that
+    run's folder status."""
+    if case.start is None:
+        return "done"
+    folder = Path(case.start.folder)
+    return st.folder_status(folder) if folder.exists() else "not run"
 
 
 def _sigterm(signum, frame):
@@ -326,10 +353,14 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
         else:
             action = "run"
         eng = engines.setdefault(p.engine, get_engine(p.engine))
-        files = eng.write_input(p.case, root / p.case_id)
         limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)
+        if action == "run" and _start_status(p.case) != "done":
+            # its input is the specimen of a run not made yet: rendered when that run has finished
+            shown = f"starts from {p.case.start.label()}"
+        else:
+            shown = f"{len(eng.write_input(p.case, root / p.case_id))} files"
         print(f"  {action:<13} {p.case_id}  {p.engine:<8} {p.group:<8} {p.label}  "
-              f"[{len(files)} files; slurm limit {limit} min]", file=stream)
+              f"[{shown}; slurm limit {limit} min]", file=stream)
         report.statuses[p.case_id] = state
     print(f"decks rendered in {root}", file=stream, flush=True)
     return report

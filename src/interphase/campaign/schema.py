@@ -7,6 +7,9 @@ File layout (SI units; [case] keys are the field names of `interphase.case.Case`
     description = "..."
     engines = ["liggghts"]             # or engine = "liggghts"; `campaign run --engine` overrides
     output = "runs/group1"             # optional; relative to the campaign file. Default: ./runs/<name>
+    specimen_from = "liggghts"         # optional, with two engines: the other engine shears the specimen
+                                       # this one consolidated for the same case (its grains and platen
+                                       # at the start of the shear); its runs come first
 
     [execution]
     executor = "local"                 # local | slurm
@@ -56,18 +59,18 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from interphase.case import Case, canonical_json, case_from_dict
+from interphase.case import PLANNED_FIELDS, Case, canonical_json, case_from_dict
 from interphase.errors import InputError
 
 ENGINES = ("liggghts", "yade")
 EXECUTORS = ("local", "slurm")
 TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs",
             "crosscheck")   # [crosscheck] tolerances: read by campaign.crosscheck, ignored here
-CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output")
+CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output", "specimen_from")
 EXECUTION_KEYS = ("executor", "jobs", "partition", "time_limit", "time_factor", "max_concurrent")
 GROUP_KEYS = ("name", "description", "case", "sweep", "zip")
 PAIR_KEYS = ("box", "case", "seeds")
-CASE_FIELDS = tuple(f for f in Case.__dataclass_fields__)
+CASE_FIELDS = tuple(f for f in Case.__dataclass_fields__ if f not in PLANNED_FIELDS)
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
@@ -111,6 +114,7 @@ class Campaign:
     output: Path
     execution: Execution = field(default_factory=Execution)
     description: str = ""
+    specimen_from: str | None = None    # the engine whose consolidated specimens the others shear
 
     @property
     def pairs(self) -> list[tuple[int, int]]:
@@ -241,6 +245,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     if not isinstance(description, str):
         raise ctx.error(("campaign", "description"), f"must be a string, got {_type_name(description)}")
     engines = _engines(ctx, meta)
+    specimen_from = _specimen_from(ctx, meta, engines)
     base_dir = path.parent.resolve()
     if output is not None:
         out = Path(output)
@@ -310,7 +315,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     cases = _add_pairs(ctx, data.get("pairs", {}), cases, seen)
     return Campaign(name=name, path=path.resolve(), engines=engines, groups=tuple(groups), cases=tuple(cases),
                     output=out.resolve() if not out.is_absolute() else out, execution=execution,
-                    description=description)
+                    description=description, specimen_from=specimen_from)
 
 
 def _as_list(z) -> list:
@@ -355,6 +360,19 @@ def _engines(ctx: _Ctx, meta: dict) -> tuple[str, ...]:
     return tuple(value)
 
 
+def _specimen_from(ctx: _Ctx, meta: dict, engines: tuple[str, ...]) -> str | None:
+    value = meta.get("specimen_from")
+    if value is None:
+        return None
+    if value not in engines:
+        raise ctx.error(("campaign", "specimen_from"), f"must be one of the campaign's engines "
+                        f"({', '.join(engines)}), got {value!r}", f'e.g. specimen_from = "{engines[0]}"')
+    if len(engines) < 2:
+        raise ctx.error(("campaign", "specimen_from"), "needs a second engine to shear the specimens",
+                        'engines = ["liggghts", "yade"], or remove specimen_from')
+    return value
+
+
 def _execution(ctx: _Ctx, ex: dict) -> Execution:
     p = ("execution",)
     _check_keys(ctx, ex, EXECUTION_KEYS, p)
@@ -383,6 +401,9 @@ def _execution(ctx: _Ctx, ex: dict) -> Execution:
 
 def _check_case_keys(ctx: _Ctx, table: dict, path: tuple) -> None:
     for key in table:
+        if key in PLANNED_FIELDS:
+            raise ctx.error(path + (key,), f"{key!r} is not set in a case table",
+                            'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"')
         if key not in CASE_FIELDS:
             raise ctx.error(path + (key,), f"unknown case field {key!r}", _did_you_mean(key, CASE_FIELDS))
 

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from interphase.case import Case
-from interphase.engines.packing import Packing, lattice_packing
+from interphase.errors import InputError
+from interphase.engines.packing import Packing, lattice_packing, start_packing
 from interphase.material import rayleigh_time, youngs_modulus
 from interphase.recipe import RECIPE, Recipe, RunRecord, Steps
 
@@ -185,6 +186,8 @@ def device(case: Case, recipe: Recipe = RECIPE) -> Device:
         z_lo = -d_max
         x_lo, x_hi = -far - D - d_max, L + far + d_max
     platen_z = pack.top + 0.5 * d_max
+    pack, dz = _started(case, pack, platen_z)
+    platen_z += dz
     inset = 0.02 * d_max
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=0.45 * d_max * 2,
                   moving=moving, fixed=fixed, exits=exits,
@@ -227,14 +230,32 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     h = recipe.platen_tooth_d50 * d50
     n = max(1, round(L / (2 * d50)))
     base = pack.top + 0.5 * d_max + h          # the tips clear the highest grain by d_max/2
+    top = base + 3 * d_max
+    pack, dz = _started(case, pack, base)
+    base += dz
     xs = np.linspace(L, 0.0, 2 * n + 1)        # right to left: the platen faces down
     zs = np.where(np.arange(2 * n + 1) % 2 == 1, base - h, base)
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * case.gradation.d_min,
                   wall_reach=0.45 * d_max * 2, moving=moving, fixed=(), exits=None,
                   platen=_segments(xs, zs), platen_com=(L / 2, base),
                   platen_force=case.normal_stress * L * case.thickness,
-                  bounds=(0.0, L, z_lo, base + 3 * d_max), window=window, packing=pack,
+                  bounds=(0.0, L, z_lo, top), window=window, packing=pack,
                   steps=step_counts(case, dt, recipe), periodic=True, bed=bed)
+
+
+def _started(case: Case, lattice: Packing, platen_z: float) -> tuple[Packing, float]:
+    """(grains, platen shift [m]) the run starts from: the lattice and 0, or, for a case with a
+    Start, the source run's consolidated grains and its platen height less `platen_z` (the bounds
+    and walls stay the lattice's, which lie above). The source must be this case's own lattice
+    consolidated (same grains by id; the plan pairs a case with its run in the other engine)."""
+    if case.start is None:
+        return lattice, 0.0
+    pack, z = start_packing(case)
+    if pack.n != lattice.n or not np.allclose(pack.diameter, lattice.diameter, rtol=1e-6, atol=0.0):
+        raise InputError(f"the {case.start.engine} run {case.start.case_id} has {pack.n} grains of other sizes "
+                         f"than this case's {lattice.n}: it is not a run of the same case", where=case.start.folder,
+                         fix="start a case only from a run of the same case (the plan does, with specimen_from)")
+    return pack, z - platen_z
 
 
 def wall_gap(profile, d_min: float, d_max: float, d50: float) -> float:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -53,6 +54,31 @@ def lattice_packing(case: Case, x_min: float, x_max: float, z_floor: float) -> P
     x = x_min + pitch * (col + 0.5 + 0.5 * (row % 2)) + rng.uniform(-0.01, 0.01, n) * pitch
     z = z_floor + pitch * (0.5 + row * math.sqrt(3) / 2)
     return Packing(x, z, d, float(np.max(z + d / 2)))
+
+
+def start_packing(case: Case) -> tuple[Packing, float]:
+    """(grains, platen height [m]) of the run `case.start` names (interphase.case.Start): its grains
+    at its first contact snapshot — the start of its shear, after its consolidation — in grain id
+    order, which is the lattice's (engines number grains 1…n in packing order), and its platen's
+    reference height (history platen_z, the same reference as Device.platen_com) at its first row
+    of the shear. Read from the run's particles.parquet and history.parquet (interphase.tables)."""
+    import pandas as pd
+
+    start = case.start
+    folder = Path(start.folder)
+    try:
+        p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "shear_disp", "id", "x", "z", "radius"])
+        h = pd.read_parquet(folder / "history.parquet", columns=["shear_disp", "platen_z"])
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputError(f"the {start.engine} run {start.case_id} this case starts from has no readable particle "
+                         f"and history tables ({type(exc).__name__}: {exc})", where=str(folder),
+                         fix=f"finish that run first: `campaign run` runs the {start.engine} cases before the others "
+                             "when the campaign has specimen_from") from None
+    first = p[p["snapshot"] == p["snapshot"].min()].sort_values("id")
+    row = int(np.argmin(np.abs(h["shear_disp"].to_numpy() - float(first["shear_disp"].iloc[0]))))
+    x, z, d = (first[c].to_numpy(float) for c in ("x", "z", "radius"))
+    d = 2 * d
+    return Packing(x, z, d, float(np.max(z + d / 2))), float(h["platen_z"].iloc[row])
 
 
 def write_liggghts_data(p: Packing, density: float, box: tuple[float, ...]) -> str:
