@@ -252,8 +252,8 @@ def _started(case: Case, lattice: Packing, platen_z: float) -> tuple[Packing, fl
         return lattice, 0.0
     pack, z = start_packing(case)
     if pack.n != lattice.n or not np.allclose(pack.diameter, lattice.diameter, rtol=1e-6, atol=0.0):
-        raise InputError(f"the {case.start.engine} run {case.start.case_id} has {pack.n} grains of other sizes "
-                         f"than this case's {lattice.n}: it is not a run of the same case", where=case.start.folder,
+        raise InputError(f"the {case.start.engine} run {case.start.case_id} is not a run of this case: its "
+                         f"{pack.n} grains are not this case's {lattice.n} of the same sizes by id", where=case.start.folder,
                          fix="start a case only from a run of the same case (the plan does, with specimen_from)")
     return pack, z - platen_z
 
