@@ -281,3 +281,48 @@ def test_periodic_device_closes_every_surface_into_its_cell():
     # YADE builds it (engines/yade_driver.py): it renders without refusal
     files = Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))
     assert json.loads(files["params.json"])["period"] == 20 * 0.7e-3
+
+
+@pytest.mark.parametrize("device_kind, test", [("walled", "interface"), ("periodic", "interface"), ("periodic", "box")])
+def test_a_started_case_takes_the_source_runs_grains_and_platen(tmp_path, device_kind, test):
+    """Case.start: the grains of the source run's first snapshot (by id) and its platen height at the
+    start of the shear replace the lattice and the platen, in both engines' files; the rest of the
+    device (walls, bounds, the periodic box's frozen bed) stays; a source of another case is refused."""
+    import pandas as pd
+
+    from interphase.case import Start
+
+    kw = dict(SMALL, device=device_kind, test=test, gradation=Gradation("poly"))
+    if test == "interface":
+        kw["profile"] = ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0)
+    case = Case(**kw)
+    plain = device_module.device(case)
+    lattice = plain.packing
+    sunk = lattice.z - 0.3 * case.d50                  # a "consolidated" specimen: the lattice, lower
+    n = lattice.n
+    pd.DataFrame({"snapshot": np.repeat([0, 1], n), "shear_disp": np.repeat([0.0, 2.5e-4], n),
+                  "id": np.tile(np.arange(n, 0, -1), 2),                # written in another order
+                  "x": np.tile(lattice.x[::-1], 2), "z": np.tile(sunk[::-1], 2),
+                  "radius": np.tile(lattice.diameter[::-1] / 2, 2)}).to_parquet(tmp_path / "particles.parquet")
+    platen = plain.platen_com[1] - 0.004
+    pd.DataFrame({"shear_disp": [1e-5, 2e-5], "platen_z": [platen, platen + 1e-6]}).to_parquet(tmp_path / "history.parquet")
+    started = case.replace(start=Start("liggghts", "0123456789ab", str(tmp_path)))
+    dev = device_module.device(started)
+    assert np.array_equal(dev.packing.x, lattice.x) and np.array_equal(dev.packing.z, sunk)
+    assert dev.platen_com[1] == pytest.approx(platen)
+    assert np.allclose(np.array(dev.platen)[:, [1, 3]] - np.array(plain.platen)[:, [1, 3]], platen - plain.platen_com[1])
+    assert dev.bounds == plain.bounds and dev.moving == plain.moving and dev.fixed == plain.fixed
+    assert dev.bed == plain.bed
+    params = json.loads(Yade().render(started)["params.json"])
+    assert params["grains"]["z"] == sunk.tolist() and params["platen_z"] == pytest.approx(platen)
+    data = Liggghts().render(started)["grains.data"]
+    assert f"{sunk[0]:.12g}" in data.split("Atoms")[1].splitlines()[2]
+    assert started.canonical()["start"] == {"engine": "liggghts", "case_id": "0123456789ab"}
+    assert "start" not in case.canonical()
+    other = case.replace(seed=2, start=Start("liggghts", "0123456789ab", str(tmp_path)))
+    with pytest.raises(InputError, match="not a run of this case") as err:
+        device_module.device(other)
+    assert str(tmp_path) in str(err.value)
+    missing = case.replace(start=Start("liggghts", "fedcba987654", str(tmp_path / "nowhere")))
+    with pytest.raises(InputError, match="fedcba987654"):
+        device_module.device(missing)
