@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,8 @@ from interphase.errors import InputError
 from interphase.material import Gradation
 from interphase.recipe import RECIPE, Recipe, RunRecord, Steps, read_record
 from interphase.surface.spec import ProfileSpec
+
+ROOT = Path(__file__).resolve().parents[1]
 
 SMALL = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10, shear_distance=2e-3,
              snapshot_every=0.5e-3, friction_ps=0.5)
@@ -278,6 +281,15 @@ def test_periodic_device_closes_every_surface_into_its_cell():
     with pytest.raises(InputError, match="ramp.csv") as e:
         close(ramp, 0.02)
     assert "walled" in e.value.fix
+    # a cut next to a sample leaves no sliver: the mean-height crossing 0.15 µm from a sample of the
+    # shipped FRT scan's line x 1/3 made a 0.15 µm face that LIGGGHTS refused (bad_mesh); every face
+    # at a cut is now ≥ 2 % of D50, and every other face is the profile's own
+    from interphase.surface.profiles import MIN_FACE_D50
+
+    frt = Case(profile=ProfileSpec.from_file(ROOT / "campaigns" / "profiles" / "frt-1.frt", axis="x", line="1/3"),
+               device="periodic", **SMALL).surface()
+    faces = np.hypot(np.diff(frt.x), np.diff(frt.z))
+    assert faces.min() >= MIN_FACE_D50 * 0.7e-3 and np.median(faces) == pytest.approx(24e-6, rel=0.01)
     # YADE builds it (engines/yade_driver.py): it renders without refusal
     files = Yade(profile=EngineProfile("yade")).render(Case(profile=ProfileSpec.make("flat"), device="periodic", **SMALL))
     assert json.loads(files["params.json"])["period"] == 20 * 0.7e-3
