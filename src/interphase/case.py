@@ -248,8 +248,8 @@ def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
 
 
-#: Case fields the plan sets, never a campaign's [case] table
-PLANNED_FIELDS = ("start",)
+#: Case fields the plan sets, never a campaign's [case] table → what to write instead
+PLANNED_FIELDS = {"start": 'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"'}
 
 
 def _did_you_mean(key: str, allowed) -> str:
@@ -284,8 +284,7 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     kwargs = {}
     for key, value in data.items():
         if key in PLANNED_FIELDS:
-            raise InputError(f"{key!r} is not set in a case table", where=where,
-                             fix='a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"')
+            raise InputError(f"{key!r} is not set in a case table", where=where, fix=PLANNED_FIELDS[key])
         if key not in fields:
             raise InputError(f"unknown key {key!r}", where=where, fix=_did_you_mean(key, fields))
         kwargs[key] = value

@@ -256,13 +256,14 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         try:
             with progress:
                 for stage in _stages(tasks, campaign.specimen_from):
-                    ready = [t for t in stage if _start_status(t.case) == "done"]
+                    waiting = {t.case_id: s for t in stage if (s := _start_status(t.case)) != "done"}
                     for t in stage:
-                        if _start_status(t.case) != "done":      # its specimen was not made: it stays pending
+                        if t.case_id in waiting:      # its specimen was not made: it stays pending
                             store.set_status(t.case_id, "pending")
                             print(f"wait {t.case_id} ({t.meta.get('label')}): the {t.case.start.engine} run it starts "
-                                  f"from, {t.case.start.case_id}, is {_start_status(t.case)}; run the same command "
+                                  f"from, {t.case.start.case_id}, is {waiting[t.case_id]}; run the same command "
                                   "again once it has finished", file=stream, flush=True)
+                    ready = [t for t in stage if t.case_id not in waiting]
                     if ready:
                         ex.run(ready, on_event)
         except DiskFull as exc:

@@ -402,8 +402,7 @@ def _execution(ctx: _Ctx, ex: dict) -> Execution:
 def _check_case_keys(ctx: _Ctx, table: dict, path: tuple) -> None:
     for key in table:
         if key in PLANNED_FIELDS:
-            raise ctx.error(path + (key,), f"{key!r} is not set in a case table",
-                            'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"')
+            raise ctx.error(path + (key,), f"{key!r} is not set in a case table", PLANNED_FIELDS[key])
         if key not in CASE_FIELDS:
             raise ctx.error(path + (key,), f"unknown case field {key!r}", _did_you_mean(key, CASE_FIELDS))
 
