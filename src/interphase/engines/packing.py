@@ -76,9 +76,8 @@ def start_packing(case: Case) -> tuple[Packing, float]:
                              "when the campaign has specimen_from") from None
     first = p[p["snapshot"] == p["snapshot"].min()].sort_values("id")
     row = int(np.argmin(np.abs(h["shear_disp"].to_numpy() - float(first["shear_disp"].iloc[0]))))
-    x, z, d = (first[c].to_numpy(float) for c in ("x", "z", "radius"))
-    d = 2 * d
-    return Packing(x, z, d, float(np.max(z + d / 2))), float(h["platen_z"].iloc[row])
+    x, z, r = (first[c].to_numpy(float) for c in ("x", "z", "radius"))
+    return Packing(x, z, 2 * r, float(np.max(z + r))), float(h["platen_z"].iloc[row])
 
 
 def write_liggghts_data(p: Packing, density: float, box: tuple[float, ...]) -> str:
