@@ -186,3 +186,23 @@ def test_predict_uses_the_reproduction_fits_by_default(capsys, tmp_path):
         assert "[" in text.split("tan δ")[1].splitlines()[0]
     else:
         assert code == 2 and "criterion_reproduction.json" in err and "--fit study" in err, err
+
+
+def test_figs_6_7_and_6_8_take_the_well_graded_cases_when_both_gradations_ran():
+    from interphase.analysis.correlations import SPECS, subset
+
+    pts = prepare_points(synthetic_summaries(300, seed=5, noise_deg=0.5))
+    mono = (pts["gradation"] == "mono").to_numpy()
+    assert 20 < mono.sum() < len(pts)
+    # uniform grains made far off the well-graded line and with another soil: they must not move the chain
+    skewed = pts.assign(theta_r_surface_deg=np.where(mono, pts["theta_r_surface_deg"] + 25.0, pts["theta_r_surface_deg"]),
+                        tan_phi=np.where(mono, 0.40, pts["tan_phi"]))
+    m = CriterionModel.from_points(skewed, "both", n_boot=0)
+    ref = CriterionModel.from_points(pts[~mono], "well-graded", n_boot=0)
+    assert m.theta_r["all"].c == pytest.approx(ref.theta_r["all"].c)
+    assert np.allclose(m.theta_r["all"].coef, ref.theta_r["all"].coef)
+    assert m.tan_phi == pytest.approx(0.55)
+    for key in ("fig6_7a", "fig6_7b", "fig6_8"):
+        assert (subset(skewed, SPECS[key])["gradation"] == "poly").all()
+    assert (subset(skewed, SPECS["fig6_10a"])["gradation"] == "mono").sum() == mono.sum()   # 6.10a: both
+    assert len(subset(skewed[mono], SPECS["fig6_8"])) > 0        # uniform grains alone keep their cases

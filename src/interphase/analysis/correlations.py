@@ -360,6 +360,7 @@ class CorrelationSpec:
     title: str
     x_label: str
     y_label: str
+    gradation: str | None = None    # the study's text names the gradation: only those cases, when present
 
 
 STUDY: tuple[CorrelationSpec, ...] = (
@@ -372,11 +373,11 @@ STUDY: tuple[CorrelationSpec, ...] = (
     CorrelationSpec("fig6_3d", "6.3d", "theta_r_region_deg", "stress_ratio_region", "plateau", "all", None,
                     "Average stress ratio (sampling region) vs θr (region)", "θr, region [° from vertical]", "average stress ratio −σxz/σzz, region [-]"),
     CorrelationSpec("fig6_7a", "6.7 (≥ 90°)", "theta_a_deg_90", "peak_stress_ratio", "plateau", "all", "friction_ps",
-                    "Peak stress ratio vs θa, all normals (≥ 90°)", "θa, filter ≥ 90° [° from vertical]", "peak stress ratio tan δ [-]"),
+                    "Peak stress ratio vs θa, all normals (≥ 90°)", "θa, filter ≥ 90° [° from vertical]", "peak stress ratio tan δ [-]", "poly"),
     CorrelationSpec("fig6_7b", "6.7 (> 92°)", "theta_a_deg_92", "peak_stress_ratio", "plateau", "all", "friction_ps",
-                    "Peak stress ratio vs θa, normals > 92°", "θa, filter > 92° [° from vertical]", "peak stress ratio tan δ [-]"),
+                    "Peak stress ratio vs θa, normals > 92°", "θa, filter > 92° [° from vertical]", "peak stress ratio tan δ [-]", "poly"),
     CorrelationSpec("fig6_8", "6.8", "theta_a_deg_92", "theta_r_surface_deg", "hinge", "not_flat_spaced", "friction_ps",
-                    "θr at the surface vs θa (> 92°), flat-spaced surfaces excluded", "θa, filter > 92° [° from vertical]", "θr, surface [° from vertical]"),
+                    "θr at the surface vs θa (> 92°), flat-spaced surfaces excluded", "θa, filter > 92° [° from vertical]", "θr, surface [° from vertical]", "poly"),
     CorrelationSpec("fig6_9", "6.9", "theta_a_ccw_deg_90", "theta_r_over_theta_a", "hinge", "flat_spaced", None,
                     "θr/θa vs θa (≥ 90°, ccw) for flat-spaced surfaces", "θa, filter ≥ 90° [° ccw from +x]", "θr/θa [-] (both ψ)"),
     CorrelationSpec("fig6_10a", "6.10a", "theta_r_surface_deg", "efficiency", "plateau", "all", None,
@@ -663,7 +664,18 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     return ens
 
 
+def of_gradation(points: pd.DataFrame, gradation: str | None) -> pd.DataFrame:
+    """The cases of `gradation` where the points have any (and all of them where they have none)."""
+    if gradation and "gradation" in points and (points["gradation"] == gradation).any():
+        return points[points["gradation"] == gradation]
+    return points
+
+
 def subset(points: pd.DataFrame, spec: CorrelationSpec) -> pd.DataFrame:
+    """The cases a correlation is fitted and drawn on. Figs. 6.7 and 6.8 are of well-graded material
+    in the study: where a campaign has well-graded cases, its uniform ones stay out of those two (they
+    enter Fig. 6.10a, which the study draws with both); a campaign of uniform grains alone keeps them."""
+    points = of_gradation(points, spec.gradation)
     if spec.subset == "flat_spaced":
         return points[points["flat_spaced"]]
     if spec.subset == "not_flat_spaced":

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.correlations import SPECS, FitError, fit_bilinear, subset
+from interphase.analysis.correlations import SPECS, FitError, fit_bilinear, of_gradation, subset
 from interphase.errors import InputError
 
 DEFAULT_PHI_DEG = 30.0
@@ -157,7 +157,9 @@ class CriterionModel:
             if f is not None:
                 tr[float(mu)] = f
         reasons.pop("fig6_8", None) if tr["all"] is not None else None
-        tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
+        # tan φ of the soil the θa–θr fit was made on (the well-graded one when both gradations ran)
+        soil = of_gradation(points, SPECS["fig6_8"].gradation)
+        tp = pd.to_numeric(soil.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
         return cls(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan,
                    theta_r={k: v for k, v in tr.items() if v is not None},
                    ratio=fit("fig6_9", subset(points, SPECS["fig6_9"])),

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from interphase import __version__
-from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
+from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, of_gradation, prepare_points, seed_ensemble
 from interphase.analysis.criterion import CriterionModel, check_cases, check_summary
 from interphase.errors import InputError
 from interphase.report import figures as F
@@ -132,7 +132,9 @@ def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionMod
         out[key] = f.fit if f is not None else None
         if f is not None and f.fit is None:
             reasons[key] = f.reason
-    tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
+    # tan φ of the soil the θa–θr fit was made on (the well-graded one when both gradations ran)
+    soil = of_gradation(points, SPECS["fig6_8"].gradation)
+    tp = pd.to_numeric(soil.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
     return CriterionModel(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan, theta_r=theta_r,
                           ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons)
 

@@ -29,11 +29,13 @@ def true_efficiency(theta_r):
 
 
 def synthetic_summaries(n: int = 200, seed: int = 0, noise_deg: float = 1.0, noise_e: float = 0.02) -> pd.DataFrame:
-    """`n` interface cases over groups 1–5 (≈ 20 % Group 2) and three frictions, plus 2 box tests."""
+    """`n` interface cases over groups 1–5 (≈ 20 % Group 2; half of Group 1 with uniform grains) and
+    three frictions, plus 2 box tests."""
     rng = np.random.default_rng(seed)
-    grad = np.where(rng.random(n) < 0.5, "mono", "poly")
+    u = rng.random(n)
     box_ids = {"mono": "box000000mono", "poly": "box000000poly"}
     group = rng.choice(["group1", "group2", "group3", "group4", "group5"], size=n, p=[0.25, 0.2, 0.2, 0.2, 0.15])
+    grad = np.where((group == "group1") & (u < 0.5), "mono", "poly")    # as the study: uniform grains on Group 1
     mu = rng.choice(FRICTIONS, size=n)
     fs = group == "group2"
     ta92 = rng.uniform(0.0, 50.0, n)
