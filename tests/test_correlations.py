@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from interphase.analysis.correlations import (BilinearFit, FitError, fit_bilinear, fit_hinge, fit_plateau,
+from interphase.analysis.correlations import (SPECS, BilinearFit, FitError, fit_bilinear, fit_hinge, fit_plateau,
                                               fit_study, prepare_points)
 from interphase.report.synthetic import synthetic_summaries
 
@@ -137,6 +137,17 @@ def test_study_fits_recover_the_synthetic_truth():
     assert t.c == pytest.approx(40, abs=3)
     assert t.predict(0.0) == pytest.approx(math.degrees(math.atan(0.05)), abs=1.5)    # intercept ≈ φμ
     assert res[("fig6_9", "all")].fit is not None
+
+
+def test_the_efficiency_criterion_is_also_fitted_per_gradation():
+    pts = prepare_points(synthetic_summaries(600, seed=4, noise_deg=0.5, noise_e=0.01))
+    mono = pts["gradation"] == "mono"
+    # uniform grains mobilised later: their E plateau starts at θr 40° instead of 30°
+    pts.loc[mono, "efficiency"] = 0.2 + 0.8 * np.minimum(pts.loc[mono, "theta_r_surface_deg"], 40.0) / 40.0
+    res = {(r.spec.key, r.slice): r.fit for r in fit_study(pts, [SPECS["fig6_10a"]], n_boot=30)}
+    assert res[("fig6_10a", "gradation=poly")].c == pytest.approx(30, abs=2)
+    assert res[("fig6_10a", "gradation=mono")].c == pytest.approx(40, abs=3)
+    assert res[("fig6_10a", "all")].n == len(pts)
 
 
 def test_study_fit_without_enough_points_says_why():

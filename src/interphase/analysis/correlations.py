@@ -380,7 +380,7 @@ STUDY: tuple[CorrelationSpec, ...] = (
                     "θr at the surface vs θa (> 92°), flat-spaced surfaces excluded", "θa, filter > 92° [° from vertical]", "θr, surface [° from vertical]", "poly"),
     CorrelationSpec("fig6_9", "6.9", "theta_a_ccw_deg_90", "theta_r_over_theta_a", "hinge", "flat_spaced", None,
                     "θr/θa vs θa (≥ 90°, ccw) for flat-spaced surfaces", "θa, filter ≥ 90° [° ccw from +x]", "θr/θa [-] (both ψ)"),
-    CorrelationSpec("fig6_10a", "6.10a", "theta_r_surface_deg", "efficiency", "plateau", "all", None,
+    CorrelationSpec("fig6_10a", "6.10a", "theta_r_surface_deg", "efficiency", "plateau", "all", "gradation",
                     "Peak efficiency vs θr at the surface", "θr, surface [° from vertical]", "efficiency E = tan δ / tan φ [-]"),
 )
 SPECS = {s.key: s for s in STUDY}

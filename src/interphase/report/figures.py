@@ -107,7 +107,8 @@ def fit_view(ax, points: pd.DataFrame, x: str, y: str, reach: float = 0.5) -> No
 
 
 def draw_fits(ax, fits, colour) -> None:
-    """Fit lines (pooled: black; per friction: that friction's colour); a note for missing fits."""
+    """Fit lines (pooled: black; per friction: that friction's colour, dashed; per gradation: grey,
+    dotted for uniform grains); a note for missing fits."""
     notes = []
     for fr in fits:
         if fr.fit is None:
@@ -123,9 +124,12 @@ def draw_fits(ax, fits, colour) -> None:
             ax.plot(xx, fr.fit.predict(xx), "k-", lw=1.6, label=f"fit (all): c = {fr.fit.c:.3g} "
                     f"[{ci[0]:.3g}, {ci[1]:.3g}] ({fr.fit.bootstrap} bootstrap), R² = {fr.fit.r2:.2f}")
         else:
-            mu = float(fr.slice.split("=")[1]) if "=" in fr.slice else None
-            ax.plot(xx, fr.fit.predict(xx), "--", lw=1.2, color=colour.get(mu, "0.4"),
-                    label=f"fit {fr.slice}: c = {fr.fit.c:.3g}")
+            by, _, value = fr.slice.partition("=")
+            style = (dict(ls="--", color=colour.get(float(value), "0.4")) if by == "friction_ps"
+                     else dict(ls=":" if value == "mono" else "-.", color="0.25"))     # per gradation
+            ci = fr.fit.c_interval_bootstrap
+            ax.plot(xx, fr.fit.predict(xx), lw=1.2, label=f"fit {fr.slice}: c = {fr.fit.c:.3g}"
+                    + (f" [{ci[0]:.3g}, {ci[1]:.3g}]" if by != "friction_ps" and np.isfinite(ci).all() else ""), **style)
     if notes:
         ax.text(0.02, 0.98, "\n".join(notes[:6]), transform=ax.transAxes, va="top", ha="left", fontsize=8,
                 color="C3", bbox=dict(facecolor="white", alpha=0.8, edgecolor="C3"))
