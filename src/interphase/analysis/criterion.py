@@ -157,13 +157,18 @@ class CriterionModel:
             if f is not None:
                 tr[float(mu)] = f
         reasons.pop("fig6_8", None) if tr["all"] is not None else None
-        # tan φ of the soil the θa–θr fit was made on (the well-graded one when both gradations ran)
-        soil = of_gradation(points, SPECS["fig6_8"].gradation)
-        tp = pd.to_numeric(soil.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
-        return cls(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan,
+        return cls(source=source, tan_phi=fitted_soil_tan_phi(points),
                    theta_r={k: v for k, v in tr.items() if v is not None},
                    ratio=fit("fig6_9", subset(points, SPECS["fig6_9"])),
                    efficiency=fit("fig6_10a", points), reasons=reasons)
+
+
+def fitted_soil_tan_phi(points: pd.DataFrame) -> float:
+    """tan φ [-] of the soil the θa–θr fit (Fig. 6.8) was made on: the median over the points of its
+    gradation (the well-graded one when both ran); NaN without a finished soil test."""
+    soil = of_gradation(points, SPECS["fig6_8"].gradation)
+    tp = pd.to_numeric(soil.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
+    return float(tp.median()) if len(tp) else math.nan
 
 
 def regular_flat_spacing(x, z, d50: float) -> tuple[bool, str]:

@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from interphase import __version__
-from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, of_gradation, prepare_points, seed_ensemble
-from interphase.analysis.criterion import CriterionModel, check_cases, check_summary
+from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
+from interphase.analysis.criterion import CriterionModel, check_cases, check_summary, fitted_soil_tan_phi
 from interphase.errors import InputError
 from interphase.report import figures as F
 from interphase.report import tables as T
@@ -132,10 +132,7 @@ def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionMod
         out[key] = f.fit if f is not None else None
         if f is not None and f.fit is None:
             reasons[key] = f.reason
-    # tan φ of the soil the θa–θr fit was made on (the well-graded one when both gradations ran)
-    soil = of_gradation(points, SPECS["fig6_8"].gradation)
-    tp = pd.to_numeric(soil.get("tan_phi", pd.Series(dtype=float)), errors="coerce").dropna()
-    return CriterionModel(source=source, tan_phi=float(tp.median()) if len(tp) else math.nan, theta_r=theta_r,
+    return CriterionModel(source=source, tan_phi=fitted_soil_tan_phi(points), theta_r=theta_r,
                           ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons)
 
 
