@@ -337,13 +337,21 @@ def _cmd_campaign_status(args) -> int:
     bad = df[df["status"].isin(("corrupt", "failed"))]
     for r in bad.itertuples():       # what is wrong and the fix, under the table (wrapped, not cut)
         if isinstance(r.message, str) and r.message:
-            console.print(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width=width,
-                          soft_wrap=False, highlight=False)
+            print(_wrap(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width))
     stale = df[df["status"] == "stale"]
     for kind, rows in stale.groupby("cause"):   # one line per kind: a recipe change makes every case stale
-        console.print(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
-                      width=width, soft_wrap=False, highlight=False)
+        print(_wrap(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
+                    width))
     return 0
+
+
+def _wrap(text: str, width: int) -> str:
+    """`text` wrapped between words only: a path or a command longer than the line stays whole (a
+    terminal folds it; copied, it still works), and continuation lines are indented."""
+    import textwrap
+
+    return textwrap.fill(text, width=width, break_long_words=False, break_on_hyphens=False,
+                         subsequent_indent="  ")
 
 
 # ---- engine cross-check: crosscheck -----------------------------------------------------------
