@@ -24,6 +24,8 @@ from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
 
 TESTS = ("interface", "box")
+#: the named preparation states → Case.preparation (docs/soils.md gives the solid fraction each reaches)
+PREPARATIONS = {"dense": 0.0, "medium": 0.3, "loose": 1.0}
 DEVICES = ("walled", "periodic")
 WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each side wall (Case.window)
 
@@ -71,6 +73,10 @@ class Case:
     box_height_d50: float = 20.0            # soil height above the surface [D50]
     n_grains: int | None = None             # None: fill the box to box_height_d50
     seed: int = 1                           # packing seed
+    preparation: float = 1.0                # the share of the grain–grain sliding and rolling friction
+                                            # active while the specimen is deposited and consolidated
+                                            # (restored for the shear): 0 the densest, 1 the grains'
+                                            # own (the loosest this protocol makes); names in PREPARATIONS
     device: str = "walled"                  # "walled": soil box between side walls (the study's);
                                             # "periodic": x periodic over the box length, no side walls
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
@@ -101,7 +107,7 @@ class Case:
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
                     "snapshot_every", "box_length_d50", "box_height_d50")
         nonneg = ("friction_pp", "friction_ps", "friction_pw", "friction_side", "rolling_friction")
-        for f in positive + nonneg + ("poisson", "restitution"):
+        for f in positive + nonneg + ("poisson", "restitution", "preparation"):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 bad(f, f"must be a finite number, got {v!r}")
@@ -113,6 +119,9 @@ class Case:
                 bad(f, f"must be ≥ 0, got {getattr(self, f)!r}")
         if not 0 <= self.poisson < 0.5:
             bad("poisson", f"must be in [0, 0.5), got {self.poisson!r}")
+        if not 0 <= self.preparation <= 1:
+            bad("preparation", f"must be in [0, 1] or one of {', '.join(PREPARATIONS)}, got {self.preparation!r}",
+                "0 deposits frictionless grains (densest), 1 at their own friction (loosest)")
         if not 0 < self.restitution <= 1:
             bad("restitution", f"must be in (0, 1], got {self.restitution!r}")
         if self.d50 > 0.1:
@@ -214,8 +223,8 @@ class Case:
             if not f.compare:
                 continue
             v = getattr(self, f.name)
-            if f.name == "start" and v is None:
-                continue            # the usual start: no key, so every case id without one stays as it was
+            if (f.name == "start" and v is None) or (f.name == "preparation" and v == 1.0):
+                continue            # the usual start and preparation: no key, so every case id without them stays as it was
             if isinstance(v, (ProfileSpec, Gradation, Start)):
                 v = v.canonical()
             elif isinstance(v, float):
@@ -229,7 +238,8 @@ class Case:
         surface = self.profile.label() if self.profile else "box"
         grading = "user" if self.gradation.sizes else self.gradation.name
         test = f"{self.test}-periodic" if self.periodic else self.test
-        return f"{test}-{surface}-mu{self.friction_ps:g}-{grading}-s{self.seed}"
+        prep = "" if self.preparation == 1.0 else f"-prep{self.preparation:g}"
+        return f"{test}-{surface}-mu{self.friction_ps:g}-{grading}{prep}-s{self.seed}"
 
     def replace(self, **changes) -> "Case":
         return dataclasses.replace(self, **changes)
@@ -326,6 +336,12 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
                                             fractions=tuple(float(f) for f in grad.get("fractions", ())))
         else:
             raise InputError(f"gradation must be 'mono', 'poly' or a table, got {grad!r}", where=f"{where}.gradation")
+    prep = kwargs.get("preparation")
+    if isinstance(prep, str):
+        if prep not in PREPARATIONS:
+            raise InputError(f"unknown preparation {prep!r}", where=f"{where}.preparation",
+                             fix=f"use one of {', '.join(PREPARATIONS)} or a number in [0, 1]")
+        kwargs["preparation"] = PREPARATIONS[prep]
     # ints given where floats are expected are fine; floats where ints are expected are not
     for key in ("n_grains", "seed"):
         if isinstance(kwargs.get(key), float) and float(kwargs[key]).is_integer():

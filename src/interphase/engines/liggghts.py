@@ -53,13 +53,19 @@ def deck_values(dev: Device) -> dict:
     kp = 1 / saturation
     lo, hi = dev.platen_band
     moving, fixed = (MESH.get(n, n) for n in dev.wall_names)
-    return dict(periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
+    # preparation: grain–grain sliding and rolling friction scaled while deposited and consolidated
+    prep = case.preparation
+    friction = grain_with + [v for mu in grain_with[1:] for v in (mu, 0.0, 0.0, 0.0)]   # symmetric 4 × 4
+    rolling = [case.rolling_friction] * 16
+    # (keys only when prepared: every other deck and engine.json stays as it was, and so do case ids)
+    prepared = dict(prep_friction=[prep * friction[0], *friction[1:]],
+                    prep_rolling=[prep * rolling[0], *rolling[1:]]) if prep != 1.0 else {}
+    return dict(**prepared, periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
                 moving_file=f"{dev.wall_names[0]}.stl",
                 bed=[i + 1 for i in dev.bed],                                  # LIGGGHTS atom ids
         version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
         E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=[case.restitution] * 16,
-        friction=grain_with + [v for mu in grain_with[1:] for v in (mu, 0.0, 0.0, 0.0)],   # symmetric 4 × 4
-        rolling=[case.rolling_friction] * 16, rolling_model=r.rolling_model,
+        friction=friction, rolling=rolling, rolling_model=r.rolling_model,
         dt=dev.dt, skin=dev.skin, moving=moving, fixed=fixed, window=dev.window, exits=dev.exits is not None,
         platen_com=dev.platen_com, platen_force=dev.platen_force, servo_vmax=vmax, servo_kp=kp,
         shear_velocity=case.shear_velocity, n_consolidate=s.n_consolidate, n_shear=s.n_shear, n_chunk=s.n_chunk,

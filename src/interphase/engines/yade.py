@@ -18,6 +18,7 @@ from pathlib import Path
 import interphase
 from interphase import __version__
 from interphase.case import Case
+from interphase.errors import InputError
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device
 from interphase.engines.render import environment
@@ -104,6 +105,10 @@ class Yade(Engine):
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
+        if case.preparation != 1.0:
+            raise InputError(f"preparation {case.preparation:g} is not built for YADE: its driver deposits and "
+                             "consolidates at the grains' own friction", where="case.preparation",
+                             fix="run prepared specimens with LIGGGHTS, or set preparation = 1 (\"loose\") for YADE")
         dev = device(case, self.recipe)
         return {"driver.py": environment(self.templates).get_template(self.template_name(case)).render(),
                 "params.json": json.dumps(driver_input(dev), indent=None, allow_nan=False),
