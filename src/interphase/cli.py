@@ -527,6 +527,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_crosscheck(sub)
     _add_compare(sub)
     _add_report(sub)
+    from interphase.cli_soils import add_soils
+
+    add_soils(sub, _print_json)
     return parser
 
 

@@ -1,0 +1,337 @@
+"""`campaign calibrate TARGET.toml`: grain parameters from a laboratory soil's element-test values,
+by GrainLearning's iterative Bayesian filter (sequential Monte Carlo over parameter samples, new
+samples drawn from a Gaussian mixture fitted to the posterior, iteration after iteration).
+
+Each iteration's samples run as one generated campaign of element tests (campaign.element): local
+or SLURM, resumable, a finished run never repeated (identity is the hash of the inputs). Every step
+of GrainLearning is deterministic here (unscrambled Halton samples first, a fixed random state for
+the mixture), so a calibration stopped at any point and started again draws the same samples and
+reuses every finished run.
+
+The target (TOML):
+
+    [target]
+    name = "ottawa-20-30"               # the card's name (soils/<name>.toml)
+    description = "..."
+    normal_stress = 100e3               # [Pa] the stress the fit uses
+    phi_peak_deg = 37.0                 # the laboratory's direct-shear values at that stress ...
+    phi_cs_deg = 31.0
+    psi_max_deg = 9.0                   # (optional)
+    source = "Author (year), Table n"   # required: where every number comes from
+    [soil]                              # the grains' fixed Case fields (interphase.soil.SOIL_FIELDS)
+    d50 = 0.00072
+    gradation = "poly"
+    [free]                              # the calibrated fields, each [min, max]
+    friction_pp = [0.3, 1.0]
+    rolling_friction = [0.1, 1.0]
+    preparation = [0.0, 1.0]
+    [element]                           # optional: the element test's cell (interphase.soil.ELEMENT_DEFAULTS)
+    [budget]                            # optional: samples per iteration, iterations, seeds per sample,
+    samples = 24                        # seeds of the final element test; quick = {...} for --quick
+    [[verification]]                    # laboratory values at stresses the fit does not use
+    normal_stress = 200e3
+    phi_peak_deg = 35.0
+    source = "..."
+
+Observations: φ_peak, φ_cs (and ψ_max when given), each sample's from its seed ensemble; the
+likelihood's spread for each is proportional to TOLERANCES (1.5°, 1.5°, 2°: what the card must reach),
+its scale set by GrainLearning to keep the effective sample size at ess_target.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+from interphase.campaign.element import element_of, run_cases, run_element, write_campaign
+from interphase.errors import InputError
+from interphase.soil import ELEMENT_DEFAULTS, SOIL_FIELDS, SoilCard, _line_of, load_card
+
+QUANTITIES = ("phi_peak_deg", "phi_cs_deg", "psi_max_deg")
+TOLERANCES = {"phi_peak_deg": 1.5, "phi_cs_deg": 1.5, "psi_max_deg": 2.0}     # [°]
+FREE_FIELDS = ("friction_pp", "rolling_friction", "preparation")
+BUDGET = {"samples": 24, "iterations": 3, "seeds": 2, "final_seeds": 5, "ess_target": 0.3, "components": 3}
+QUICK = {"samples": 4, "iterations": 1, "seeds": 1, "final_seeds": 2}
+TARGET_KEYS = ("name", "description", "normal_stress", *QUANTITIES, "source", "density_state", "note")
+
+
+@dataclass(frozen=True)
+class Target:
+    path: Path
+    name: str
+    normal_stress: float
+    values: dict                    # quantity → laboratory value [°]
+    source: str
+    soil: dict
+    free: dict                      # field → (min, max)
+    element: dict
+    budget: dict
+    verification: tuple = ()
+    raw: dict = field(default_factory=dict)
+
+
+def load_target(path) -> Target:
+    p = Path(path)
+    try:
+        text = p.read_text()
+        data = tomllib.loads(text)
+    except FileNotFoundError:
+        raise InputError("target file not found", where=str(p), fix="give a calibration target TOML") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"TOML syntax error: {exc}", where=str(p)) from None
+
+    def bad(table, key, msg, fix=None):
+        line = _line_of(text, table, key)
+        return InputError(msg, where=f"{p}:{line}: [{table}] {key}" if line else f"{p}: [{table}] {key}", fix=fix)
+
+    for key in data:
+        if key not in ("target", "soil", "free", "element", "budget", "verification"):
+            raise InputError(f"unknown table [{key}]", where=str(p),
+                             fix="a target has [target], [soil], [free], [element], [budget], [[verification]]")
+    t = data.get("target")
+    if not isinstance(t, dict):
+        raise InputError("no [target] table", where=str(p), fix="give the laboratory values under [target]")
+    for key in t:
+        if key not in TARGET_KEYS:
+            raise bad("target", key, f"unknown key {key!r}", f"allowed: {', '.join(TARGET_KEYS)}")
+    if not str(t.get("source", "")).strip():
+        raise bad("target", "source", "the laboratory values carry no source",
+                  "give source = \"Author (year), title, table or figure\": a number without its source is not used")
+    name = t.get("name", p.stem)
+    sigma = t.get("normal_stress")
+    if not isinstance(sigma, (int, float)) or not sigma > 0:
+        raise bad("target", "normal_stress", f"must be a stress > 0 in Pa, got {sigma!r}", "e.g. normal_stress = 100e3")
+    values = {}
+    for q in QUANTITIES:
+        if q in t:
+            v = t[q]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 90:
+                raise bad("target", q, f"must be an angle in degrees in [0, 90), got {v!r}")
+            values[q] = float(v)
+    for q in QUANTITIES[:2]:
+        if q not in values:
+            raise bad("target", q, f"{q} is missing", "the calibration needs φ_peak and φ_cs at the target stress")
+    if values["phi_cs_deg"] > values["phi_peak_deg"]:
+        raise bad("target", "phi_cs_deg", f"φ_cs {values['phi_cs_deg']}° exceeds φ_peak {values['phi_peak_deg']}°",
+                  "φ_cs ≤ φ_peak: check the two values against their source")
+    soil = dict(data.get("soil", {}))
+    for key in soil:
+        if key not in SOIL_FIELDS:
+            raise bad("soil", key, f"{key!r} is not a soil field", f"use {', '.join(SOIL_FIELDS)}")
+    free = {}
+    for key, rng in data.get("free", {}).items():
+        if key not in FREE_FIELDS:
+            raise bad("free", key, f"{key!r} cannot be calibrated", f"free parameters: {', '.join(FREE_FIELDS)}")
+        if key in soil:
+            raise bad("free", key, f"{key!r} is both fixed in [soil] and free", "keep it in one of the two")
+        if (not isinstance(rng, list) or len(rng) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in rng)):
+            raise bad("free", key, f"must be a range [min, max], got {rng!r}", f"e.g. {key} = [0.1, 1.0]")
+        if rng[0] >= rng[1]:
+            raise bad("free", key, f"the range's min {rng[0]} is not below its max {rng[1]}", "write [min, max]")
+        if rng[0] < 0 or (key == "preparation" and rng[1] > 1):
+            raise bad("free", key, f"the range {rng} leaves the field's domain",
+                      "frictions ≥ 0; preparation within [0, 1]")
+        free[key] = (float(rng[0]), float(rng[1]))
+    if not free:
+        raise InputError("no [free] parameter", where=str(p), fix=f"free some of {', '.join(FREE_FIELDS)} with ranges")
+    element = dict(ELEMENT_DEFAULTS)
+    for key, v in data.get("element", {}).items():
+        if key not in ELEMENT_DEFAULTS:
+            raise bad("element", key, f"{key!r} is not an element-test field", f"use {', '.join(ELEMENT_DEFAULTS)}")
+        element[key] = v
+    budget = dict(BUDGET)
+    raw_budget = data.get("budget", {})
+    quick = dict(QUICK) | raw_budget.get("quick", {})
+    for key, v in raw_budget.items():
+        if key == "quick":
+            continue
+        if key not in BUDGET:
+            raise bad("budget", key, f"unknown key {key!r}", f"allowed: {', '.join(BUDGET)}, quick")
+        budget[key] = v
+    budget["quick"] = quick
+    verification = []
+    for i, v in enumerate(data.get("verification", [])):
+        if not str(v.get("source", "")).strip():
+            raise InputError("a verification row carries no source", where=f"{p}: [[verification]] #{i + 1}",
+                             fix="give source = \"Author (year), table or figure\"")
+        if not isinstance(v.get("normal_stress"), (int, float)) or not v["normal_stress"] > 0:
+            raise InputError("needs normal_stress > 0 [Pa]", where=f"{p}: [[verification]] #{i + 1}")
+        verification.append(dict(v))
+    # the grains must make a valid Case with every free field at its bounds
+    probe = SoilCard(name=str(name), path=p, soil={**soil, **{k: r[0] for k, r in free.items()}}, element=element)
+    from interphase.case import case_from_dict
+
+    case_from_dict(probe.element_case(float(sigma)), where=f"{p}: [soil]")
+    return Target(p, str(name), float(sigma), values, str(t["source"]), soil, free, element, budget,
+                  tuple(verification), raw=data)
+
+
+def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
+    order = np.argsort(x)
+    cw = np.cumsum(w[order])
+    return float(np.interp(q * cw[-1], cw, x[order]))
+
+
+def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
+              stream=None) -> dict:
+    """Calibrate, write the soil card, return what it holds (JSON data)."""
+    from grainlearning import BayesianCalibration
+    from grainlearning.dynamic_systems import DynamicSystem
+
+    stream = stream or sys.stdout
+    target = load_target(target_path)
+    budget = {**target.budget, **(target.budget["quick"] if quick else {})}
+    budget.pop("quick", None)
+    output = Path(output) if output else Path("runs") / "calibrate" / target.name
+    card_path = Path(card_path) if card_path else Path("soils") / f"{target.name}.toml"
+    names = list(target.free)
+    obs = [q for q in QUANTITIES if q in target.values]
+    obs_values = np.array([[target.values[q]] for q in obs])
+    inv_w = [(TOLERANCES[q] / target.values[q]) ** 2 for q in obs]
+    t0 = time.time()
+    history: list[dict] = []          # every sample: params, achieved values, iteration
+    n_runs = 0
+
+    def base_case(sigma: float) -> dict:
+        case = {"test": "box", "device": "periodic", **target.soil, **target.element, "normal_stress": sigma}
+        return case
+
+    def run_samples(calib):
+        nonlocal n_runs
+        it = calib.curr_iter
+        params = np.asarray(calib.system.param_data, float)
+        zip_ = {k: [round(float(v), 6) for v in params[:, j]] for j, k in enumerate(names)}
+        zip_["name"] = [f"{target.name}-i{it}-k{k}" for k in range(len(params))]
+        path = write_campaign(output / f"iteration-{it}.toml", name=f"calibrate-{target.name}-i{it}",
+                              case=base_case(target.normal_stress), zip_=zip_,
+                              sweep={"seed": list(range(1, int(budget["seeds"]) + 1))},
+                              executor=executor or "local", jobs=jobs or 0,
+                              description=f"calibration of {target.name}, iteration {it}")
+        print(f"calibrate {target.name}: iteration {it}, {len(params)} samples × {budget['seeds']} seed(s) → {path}",
+              file=stream, flush=True)
+        planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream)
+        n_runs += len(planned)
+        sim = np.zeros((len(params), len(obs), 1))
+        for k in range(len(params)):
+            cases = [p for p in planned if p.case.name == zip_["name"][k]]
+            r = element_of(cases, series, summ, cases[0].case.d50, target.normal_stress).to_dict()
+            vals = [r[q] if r[q] is not None else 0.0 for q in obs]    # a failed sample: far from any target
+            sim[k, :, 0] = vals
+            history.append({"iteration": it, **{n: float(params[k, j]) for j, n in enumerate(names)},
+                            **{q: r[q] for q in QUANTITIES}, "solid_fraction": r["solid_fraction"],
+                            "has_peak": r["has_peak"], "seeds": r["n_seeds"]})
+        calib.system.set_sim_data(sim)
+
+    calib = BayesianCalibration.from_dict({
+        "num_iter": int(budget["iterations"]), "callback": run_samples, "save_fig": -1,
+        "system": {"system_type": DynamicSystem, "param_names": names,
+                   "param_min": [target.free[n][0] for n in names], "param_max": [target.free[n][1] for n in names],
+                   "num_samples": int(budget["samples"]), "obs_data": obs_values, "obs_names": obs,
+                   "ctrl_data": [target.normal_stress], "sim_name": target.name, "inv_obs_weight": inv_w},
+        "inference": {"Bayes_filter": {"ess_target": float(budget["ess_target"])},
+                      "sampling": {"max_num_components": int(budget["components"]), "random_state": 0,
+                                   "slice_sampling": False}},
+    })
+    _quiet(lambda: _iterate(calib, int(budget["iterations"])))
+    post = np.asarray(calib.inference.posterior if getattr(calib.inference, "posterior", None) is not None
+                      else calib.inference.Bayes_filter.get_posterior_at_time(), float).ravel()
+    params = np.asarray(calib.system.param_data, float)
+    best = int(np.argmax(post))
+    chosen = {n: round(float(params[best, j]), 4) for j, n in enumerate(names)}
+    posterior = {n: {"mean": float(post @ params[:, j]), "lo": _weighted_quantile(params[:, j], post, 0.025),
+                     "hi": _weighted_quantile(params[:, j], post, 0.975)} for j, n in enumerate(names)}
+    ess = float(1.0 / np.sum(post ** 2)) if post.sum() > 0 else math.nan
+
+    card = SoilCard(name=target.name, path=card_path, soil={**target.soil, **chosen}, element=target.element)
+    seeds = range(1, int(budget["final_seeds"]) + 1)
+    element_out = Path("runs") / "element" / target.name
+    print(f"calibrate {target.name}: the chosen grains' element test at {target.normal_stress / 1e3:g} kPa, "
+          f"{len(seeds)} seeds", file=stream, flush=True)
+    final, *held_out = run_element(card, [target.normal_stress, *(v["normal_stress"] for v in target.verification)],
+                                   seeds, output=element_out, executor=executor, jobs=jobs, stream=stream)
+    achieved = [{"quantity": q, "target": target.values[q], "value": getattr(final, q),
+                 "lo": getattr(final, q + "_lo"), "hi": getattr(final, q + "_hi")} for q in obs]
+    verification = []
+    for v, r in zip(target.verification, held_out):
+        verification.append({**v, "measured": {k: val for k, val in r.to_dict().items()
+                                               if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")}})
+    n_runs += len(seeds) * (1 + len(target.verification))
+    result = {
+        "card": str(card_path), "target": target.name, "chosen": chosen, "posterior": posterior,
+        "achieved": achieved, "verification": verification,
+        "calibration": {"runs": n_runs, "wall_time_s": round(time.time() - t0, 1), "iterations": len(
+            {h["iteration"] for h in history}), "samples": len(history), "effective_sample_size": ess,
+            "budget": budget, "quick": quick, "element_solid_fraction": final.solid_fraction,
+            "element_has_peak": final.has_peak, "engine": "liggghts"},
+    }
+    write_card(card_path, target, result)
+    import pandas as pd
+
+    pd.DataFrame(history).to_csv(output / "samples.csv", index=False)
+    return result
+
+
+def _iterate(calib, iterations: int) -> None:
+    """GrainLearning's iteration (BayesianCalibration.run_one_iteration), except that the last one
+    fits no new proposal: nothing would run from it, and with few samples the mixture fit fails on a
+    posterior that sits on one sample."""
+    inference, system = calib.inference, calib.system
+    for it in range(iterations):
+        calib.curr_iter = system.curr_iter = it
+        if it == 0:
+            inference.initialize(system)
+        system.param_data = inference.param_data_list[-1]
+        system.num_samples = system.param_data.shape[0]
+        system.sim_data = None
+        calib.callback(calib)
+        inference.run_inference(system)
+        inference.sigma_list.append(system.sigma_max)
+        if it < iterations - 1:
+            inference.run_sampling(system)
+
+
+def _quiet(fn):
+    """GrainLearning prints its progress on stdout: send it to stderr so that --json stays clean."""
+    import contextlib
+
+    with contextlib.redirect_stdout(sys.stderr):
+        return fn()
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items() if v is not None and not (isinstance(v, float) and math.isnan(v))}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (np.floating, np.integer)):
+        return obj.item()
+    return obj
+
+
+def write_card(path: Path, target: Target, result: dict) -> None:
+    """The soil card: [soil] (chosen), [element], [target] (as given), [posterior], [[achieved]],
+    [[verification]], [calibration]."""
+    t = target.raw["target"]
+    data = {
+        "soil": {"name": target.name, "description": str(t.get("description", "")), **target.soil,
+                 **result["chosen"]},
+        "element": target.element,
+        "target": {**t, "free": {k: list(v) for k, v in target.free.items()}},
+        "posterior": result["posterior"],
+        "achieved": result["achieved"],
+        "verification": result["verification"],
+        "calibration": result["calibration"],
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    head = (f"# Soil card {target.name}: written by `campaign calibrate {target.path.name}`. [soil] is what a campaign\n"
+            f"# uses ([case] soil = \"{path.as_posix()}\"); the rest records how it was found (docs/soils.md).\n")
+    path.write_text(head + tomli_w.dumps(_clean(data)))
+    load_card(path)          # the card we wrote reads back

@@ -1,0 +1,88 @@
+"""The soil's element test through the campaign machinery: a generated campaign file of box cases
+(the card's soil at its element protocol), run by `campaign.run.run_campaign` (resumable, local or
+SLURM, a finished case never run twice: identity is the hash of the inputs), and read back as
+`analysis.element.ElementResult`s.
+
+The generated file (`<output>/<name>.toml`) is the record of what ran; running the same command
+again reuses every finished case.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import tomli_w
+
+from interphase.analysis.element import ElementResult, element_result
+from interphase.soil import SoilCard
+
+
+def write_campaign(path: Path, *, name: str, case: dict, sweep: dict | None = None, zip_: dict | None = None,
+                   executor: str = "local", jobs: int = 0, description: str = "") -> Path:
+    """A campaign file of box cases (plain data → TOML); `output` is the file's own folder."""
+    data = {"campaign": {"name": name, "description": description, "engines": ["liggghts"], "output": "."},
+            "execution": {"executor": executor, "jobs": int(jobs)}, "case": case}
+    if sweep:
+        data["sweep"] = sweep
+    if zip_:
+        data["zip"] = zip_
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = tomli_w.dumps(data)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(f"# written by interphase-dem ({name}); running it again reuses every finished case\n" + text)
+    return path
+
+
+def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None):
+    """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame}, summaries
+    table of the finished ones). Failed cases are reported by the run and left out of the results."""
+    from interphase.campaign.plan import plan
+    from interphase.campaign.run import run_campaign
+    from interphase.campaign.schema import load_campaign
+    from interphase.campaign.store import CampaignStore
+
+    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False)
+    campaign = load_campaign(path)
+    planned = plan(campaign)
+    series = {}
+    with CampaignStore(campaign.output) as store:
+        summ = store.summaries()
+        for p in planned:
+            if p.case_id in set(summ["case_id"]) if len(summ) else False:
+                try:
+                    series[p.case_id] = pd.read_parquet(store.case_folder(p.case_id) / "series.parquet",
+                                                        columns=["shear_disp", "stress_ratio", "platen_z"])
+                except (OSError, ValueError, KeyError):
+                    pass
+    return planned, series, summ.set_index("case_id") if len(summ) else summ
+
+
+def element_of(cases, series: dict, summ: pd.DataFrame, d50: float, normal_stress: float) -> ElementResult:
+    """The ElementResult of the planned `cases` (one physical soil at one stress, its seeds)."""
+    runs = []
+    for p in cases:
+        s = series.get(p.case_id)
+        if s is None:
+            continue
+        sf = float(summ.loc[p.case_id, "solid_fraction"]) if "solid_fraction" in summ.columns else np.nan
+        runs.append((s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float),
+                     s["platen_z"].to_numpy(float), sf))
+    return element_result(runs, d50, normal_stress)
+
+
+def run_element(card: SoilCard, normal_stresses, seeds, *, output: Path | None = None, executor: str | None = None,
+                jobs: int | None = None, stream=None) -> list[ElementResult]:
+    """The element test of `card` at each normal stress [Pa] on packing seeds `seeds`."""
+    output = Path(output) if output else Path("runs") / "element" / card.name
+    stresses = [float(s) for s in normal_stresses]
+    base = card.element_case(stresses[0])
+    base.pop("normal_stress"), base.pop("seed")
+    path = write_campaign(output / f"element-{card.name}.toml", name=f"element-{card.name}", case=base,
+                          sweep={"normal_stress": stresses, "seed": [int(s) for s in seeds]},
+                          description=f"element test of the soil card {card.path}")
+    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream)
+    return [element_of(cases, series, summ, cases[0].case.d50, s)
+            for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]

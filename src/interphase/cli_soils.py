@@ -1,0 +1,85 @@
+"""The soil commands of `campaign`: `element` (the soil's own test) and `calibrate` (grain parameters
+from a laboratory target). Argument parsing and printing only; the work is in interphase.soil,
+campaign.element and campaign.calibrate."""
+
+from __future__ import annotations
+
+import sys
+
+
+def add_soils(sub, print_json) -> None:
+    p = sub.add_parser("element", help="the soil's element test: φ_peak, φ_cs, ψ_max and solid fraction with seed "
+                       "intervals (periodic shear cell of the soil alone)")
+    p.add_argument("card", help="soil card (soils/NAME.toml)")
+    p.add_argument("--normal-stress", type=float, action="append", required=True, metavar="PA",
+                   help="normal stress [Pa] (repeatable)")
+    p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
+    p.add_argument("--output", default=None, help="runs folder (default: runs/element/<card name>)")
+    p.add_argument("--executor", choices=("local", "slurm"), default=None)
+    p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=lambda a: _cmd_element(a, print_json))
+
+    p = sub.add_parser("calibrate", help="calibrate grain parameters to a laboratory soil (GrainLearning: "
+                       "Bayesian, iterative); writes a soil card with its posterior")
+    p.add_argument("target", help="calibration target (TOML: soil, laboratory values with their source, free "
+                   "parameters with ranges)")
+    p.add_argument("--quick", action="store_true", help="the smallest budget (tests, a first look)")
+    p.add_argument("--card", default=None, help="the card to write (default: soils/<target name>.toml)")
+    p.add_argument("--output", default=None, help="runs folder (default: runs/calibrate/<target name>)")
+    p.add_argument("--executor", choices=("local", "slurm"), default=None)
+    p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=lambda a: _cmd_calibrate(a, print_json))
+
+
+def _check_seeds(n: int) -> None:
+    from interphase.errors import InputError
+
+    if n < 1:
+        raise InputError(f"must be ≥ 1, got {n}", where="--seeds", fix="give the number of packing seeds, e.g. 3")
+
+
+def _cmd_element(args, print_json) -> int:
+    from interphase.campaign.element import run_element
+    from interphase.errors import InputError
+    from interphase.soil import load_card
+
+    _check_seeds(args.seeds)
+    for s in args.normal_stress:
+        if not s > 0:
+            raise InputError(f"must be > 0 Pa, got {s!r}", where="--normal-stress", fix="e.g. --normal-stress 100e3")
+    card = load_card(args.card)
+    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=args.output,
+                          executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        rows = [r.to_dict() for r in results]
+        print_json(rows[0] if len(rows) == 1 else rows)
+        return 0 if all(r.n_seeds for r in results) else 1
+    for r in results:
+        def iv(name, fmt=".1f"):
+            v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
+            return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
+        print(f"{card.name} at {r.normal_stress / 1e3:g} kPa, {r.n_seeds} seeds: φ_peak {iv('phi_peak_deg')}°, "
+              f"φ_cs {iv('phi_cs_deg')}°, ψ_max {iv('psi_max_deg')}°, solid fraction {iv('solid_fraction', '.3f')}, "
+              f"peak at {r.peak_disp * 1e3:.2f} of {r.shear_distance * 1e3:.2f} mm")
+        if r.note:
+            print(f"  note: {r.note}")
+    return 0 if all(r.n_seeds for r in results) else 1
+
+
+def _cmd_calibrate(args, print_json) -> int:
+    from interphase.campaign.calibrate import calibrate
+
+    result = calibrate(args.target, quick=args.quick, card_path=args.card, output=args.output,
+                       executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        print_json(result)
+    else:
+        print(f"soil card written: {result['card']}")
+        for k, v in result["chosen"].items():
+            print(f"  {k} = {v:.4g} ({result['posterior'][k]['lo']:.4g}–{result['posterior'][k]['hi']:.4g})")
+        for a in result["achieved"]:
+            print(f"  {a['quantity']}: target {a['target']:.1f}°, achieved {a['value']:.1f}° "
+                  f"({a['lo']:.1f}–{a['hi']:.1f})")
+    return 0

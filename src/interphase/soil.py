@@ -1,0 +1,117 @@
+"""Soil cards: a calibrated granular soil as data (`soils/NAME.toml`), and the element test's cases.
+
+A card holds the Case fields of the grains (`[soil]`), the element test's protocol (`[element]`),
+and what the calibration knew and found (`[target]`, `[posterior]`, `[[achieved]]`,
+`[[verification]]`, written by `campaign calibrate`). A campaign uses it with
+`[case] soil = "soils/NAME.toml"`: the card's `[soil]` fields fill the Case; a field set in the
+campaign as well is an error naming both places (a soil is calibrated as a whole).
+
+The element test is the soil's own shear test in the wall-free device (Case test = "box", device =
+"periodic": the soil sheared against a frozen bed of its own grains under a servo platen, x
+periodic; docs/strength.md, docs/soils.md), at the card's `[element]` cell and speed.
+Units: SI (m, Pa, m/s, kg/m³).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from interphase.errors import InputError
+
+#: Case fields a card may set: the grains and how the specimen is made, nothing of a surface or a test
+SOIL_FIELDS = ("d50", "gradation", "density", "shear_modulus", "poisson", "restitution", "friction_pp",
+               "rolling_friction", "preparation")
+#: Case fields of the element test's protocol, and their defaults (docs/soils.md: the cell and speed
+#: that agree with the interface campaigns' 40 × 25 D50 soil test at 0.02 m/s within its scatter)
+ELEMENT_DEFAULTS = {"box_length_d50": 20.0, "box_height_d50": 15.0, "shear_velocity": 0.05,
+                    "shear_distance": 0.006, "snapshot_every": 0.0005, "friction_pw": 0.9}
+CARD_KEYS = ("soil", "element", "target", "posterior", "achieved", "verification", "calibration")
+
+
+@dataclass(frozen=True)
+class SoilCard:
+    name: str
+    path: Path
+    soil: dict                        # Case fields (SOIL_FIELDS)
+    element: dict                     # element-test protocol (ELEMENT_DEFAULTS keys)
+    description: str = ""
+    extra: dict = field(default_factory=dict)     # target, posterior, achieved, verification, calibration
+
+    def element_case(self, normal_stress: float, seed: int = 1, **changes) -> dict:
+        """The element test's Case fields as a [case] table (plain data)."""
+        return {"test": "box", "device": "periodic", **self.soil, **self.element, "normal_stress": float(normal_stress),
+                "seed": int(seed), **changes}
+
+
+def _line_of(text: str, table: str, key: str) -> int | None:
+    """The line of `key = ` inside `[table]` (1-based), for messages."""
+    inside = False
+    for n, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if s.startswith("["):
+            inside = s.strip("[] ") == table
+        elif inside and s.split("=", 1)[0].strip() == key:
+            return n
+    return None
+
+
+def load_card(path) -> SoilCard:
+    """Read and check a soil card. Every problem is an InputError naming the file, line and field."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+        data = tomllib.loads(text)
+    except FileNotFoundError:
+        raise InputError("soil card not found", where=str(p), fix="give the path of a soils/NAME.toml card "
+                         "(`campaign calibrate TARGET.toml` writes one)") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"TOML syntax error: {exc}", where=str(p)) from None
+
+    def bad(table, key, msg, fix=None):
+        line = _line_of(text, table, key)
+        return InputError(msg, where=f"{p}:{line}: [{table}] {key}" if line else f"{p}: [{table}] {key}", fix=fix)
+
+    for key in data:
+        if key not in CARD_KEYS:
+            raise InputError(f"unknown table [{key}]", where=str(p), fix=f"a soil card has {', '.join(CARD_KEYS)}")
+    soil = dict(data.get("soil", {}))
+    if not soil:
+        raise InputError("no [soil] table", where=str(p), fix=f"give the grains' Case fields: {', '.join(SOIL_FIELDS)}")
+    name = soil.pop("name", p.stem)
+    description = soil.pop("description", "")
+    for key in soil:
+        if key not in SOIL_FIELDS:
+            raise bad("soil", key, f"{key!r} is not a soil field", f"a card sets only {', '.join(SOIL_FIELDS)}; "
+                      "surface and test fields belong in the campaign")
+    element = dict(ELEMENT_DEFAULTS)
+    for key, value in data.get("element", {}).items():
+        if key not in ELEMENT_DEFAULTS:
+            raise bad("element", key, f"{key!r} is not an element-test field", f"use {', '.join(ELEMENT_DEFAULTS)}")
+        element[key] = value
+    card = SoilCard(name=str(name), path=p.resolve(), soil=soil, element=element, description=str(description),
+                    extra={k: data[k] for k in CARD_KEYS[2:] if k in data})
+    try:                               # every field checked now, as the Case would
+        from interphase.case import case_from_dict
+
+        case_from_dict(card.element_case(100e3), where=f"{p}: [soil]")
+    except InputError as exc:
+        raise InputError(str(exc).split(": ", 1)[-1], where=f"{p}: [soil]") from None
+    return card
+
+
+def merge_soil(table: dict, card: SoilCard, where: str) -> dict:
+    """A campaign's [case] table with the card's soil fields filled in; a field in both is an error
+    naming both places."""
+    both = sorted(set(table) & set(card.soil))
+    if both:
+        raise InputError(f"{both[0]!r} is set here and in the soil card {card.path}", where=where,
+                         fix=f"remove {both[0]!r} from the campaign (the card's soil is calibrated as a whole), "
+                             "or drop `soil` and give every soil field yourself")
+    return {**card.soil, **table}
+
+
+def atan_deg(ratio: float) -> float:
+    return math.degrees(math.atan(ratio))
