@@ -13,6 +13,7 @@ class InputError(ValueError):
 
     def __init__(self, message: str, *, where: str | None = None, fix: str | None = None):
         self.where = where
+        self.message = message
         self.fix = fix
         text = f"{where}: {message}" if where else message
         if fix:

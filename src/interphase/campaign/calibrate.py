@@ -246,8 +246,11 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
     params = np.asarray(calib.system.param_data, float)
     best = int(np.argmax(post))
     chosen = {n: round(float(params[best, j]), 4) for j, n in enumerate(names)}
-    posterior = {n: {"mean": float(post @ params[:, j]), "lo": _weighted_quantile(params[:, j], post, 0.025),
-                     "hi": _weighted_quantile(params[:, j], post, 0.975)} for j, n in enumerate(names)}
+    # 95 % credible intervals: weighted quantiles of the last iteration's samples (clipped to the
+    # range: GrainLearning's normalisation leaves its bounds off by an ulp)
+    posterior = {n: {"mean": float(post @ params[:, j]),
+                     **{k: float(np.clip(_weighted_quantile(params[:, j], post, q), *target.free[n]))
+                        for k, q in (("lo", 0.025), ("hi", 0.975))}} for j, n in enumerate(names)}
     ess = float(1.0 / np.sum(post ** 2)) if post.sum() > 0 else math.nan
 
     card = SoilCard(name=target.name, path=card_path, soil={**target.soil, **chosen}, element=target.element)

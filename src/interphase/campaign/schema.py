@@ -294,6 +294,9 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
         _check_case_keys(ctx, gcase, gpath + ("case",))
         base = _merge(top_case, gcase)
         factors, variables = _factors(ctx, sweep, zips, gpath)
+        if "soil" in base:
+            where = gpath + ("case", "soil") if "soil" in gcase else ("case", "soil")
+            base = _with_soil(ctx, base, base_dir, where, variables)
         groups.append(Group(gname, tuple(variables), gdesc if isinstance(gdesc, str) else ""))
         for combo in itertools.product(*factors) if factors else [()]:
             values: list[tuple[str, object, tuple]] = [kv for part in combo for kv in part]
@@ -399,8 +402,34 @@ def _execution(ctx: _Ctx, ex: dict) -> Execution:
     return Execution(executor, jobs, part, None if tl is None else float(tl), float(tf), mc)
 
 
+def _with_soil(ctx: _Ctx, base: dict, base_dir: Path, where: tuple, variables) -> dict:
+    """[case] soil = "soils/NAME.toml": the card's soil fields fill the case (interphase.soil); a
+    field set in the campaign as well, as a constant or swept, is an error naming both places."""
+    from interphase.soil import load_card, merge_soil
+
+    base = dict(base)
+    ref = base.pop("soil")
+    if not isinstance(ref, str) or not ref:
+        raise ctx.error(where, f"soil must be the path of a soil card, got {ref!r}", 'e.g. soil = "soils/ottawa-20-30.toml"')
+    path = Path(ref) if Path(ref).is_absolute() else base_dir / ref
+    try:
+        card = load_card(path)
+    except InputError as exc:
+        raise ctx.error(where, f"the soil card: {exc}", None) from None
+    for v in variables:
+        if v.split(".")[0] in card.soil:
+            raise ctx.error(where, f"{v!r} is swept here and set in the soil card {card.path}",
+                            "remove it from the sweep (the card's soil is calibrated as a whole), or drop `soil`")
+    try:
+        return merge_soil(base, card, where="")
+    except InputError as exc:
+        raise ctx.error(where, exc.message, exc.fix) from None
+
+
 def _check_case_keys(ctx: _Ctx, table: dict, path: tuple) -> None:
     for key in table:
+        if key == "soil":
+            continue
         if key in PLANNED_FIELDS:
             raise ctx.error(path + (key,), f"{key!r} is not set in a case table", PLANNED_FIELDS[key])
         if key not in CASE_FIELDS:

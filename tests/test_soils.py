@@ -1,0 +1,175 @@
+"""Soils: the preparation field, the element test (analysis and the real engine), soil cards in
+campaigns, and `campaign calibrate` (a tiny real calibration; bad targets)."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from interphase.analysis.element import element_result
+from interphase.case import PREPARATIONS, Case, case_from_dict
+from interphase.cli import main
+from interphase.errors import InputError
+
+DATA = Path(__file__).parent / "data" / "soils"
+
+
+# ---- preparation ---------------------------------------------------------------------------------
+def test_preparation_default_keeps_every_case_id_and_names_map_to_numbers():
+    c = Case(test="box")
+    assert "preparation" not in c.canonical()                     # default: no key, ids unchanged
+    assert "preparation" in c.replace(preparation=0.0).canonical()
+    dense = case_from_dict({"test": "box", "preparation": "dense"})
+    assert dense.preparation == PREPARATIONS["dense"] == 0.0 and dense.label().endswith("-prep0-s1")
+    with pytest.raises(InputError, match="preparation"):
+        case_from_dict({"test": "box", "preparation": "very dense"})
+    with pytest.raises(InputError, match=r"\[0, 1\]"):
+        Case(test="box", preparation=1.5)
+
+
+def test_yade_refuses_a_prepared_specimen_with_the_fix():
+    from interphase.engines.yade import Yade
+
+    case = Case(test="box", device="periodic", preparation=0.0, box_length_d50=12, box_height_d50=8)
+    with pytest.raises(InputError, match="LIGGGHTS"):
+        Yade().render(case)
+
+
+def test_liggghts_deck_deposits_with_scaled_friction_and_restores_it_for_the_shear():
+    from interphase.engines.liggghts import Liggghts
+
+    case = Case(test="box", device="periodic", preparation=0.3, friction_pp=0.5, rolling_friction=0.2,
+                box_length_d50=12, box_height_d50=8)
+    deck = Liggghts().render(case)["in.deck"]
+    lines = [ln.split() for ln in deck.splitlines() if ln.startswith("fix m4 ")]
+    rolls = [ln.split() for ln in deck.splitlines() if ln.startswith("fix m5 ")]
+    assert [float(ln[7]) for ln in lines] == pytest.approx([0.15, 0.5])        # grain–grain: deposited, then sheared
+    assert [float(ln[7]) for ln in rolls] == pytest.approx([0.06, 0.2])
+    assert deck.index("label consolidated") < deck.rindex("fix m4 ") < deck.index("fix shear all move/mesh")
+    assert Liggghts().render(case.replace(preparation=1.0))["in.deck"].count("fix m4 ") == 1
+
+
+# ---- element analysis on curves with known answers ---------------------------------------------
+def _curve(peak=0.8, crit=0.6, rate=0.25, end=6e-3, noise=0.0, seed=0):
+    """A dense specimen's τ/σ(u): rises to `peak` at 0.8–1.2 mm, falls to `crit` by 3 mm; h(u) rises at
+    `rate` up to 1 mm then levels off (its dilation rate falls to 0 by 3 mm)."""
+    u = np.linspace(0, end, 600)
+    r = np.interp(u, [0, 0.8e-3, 1.2e-3, 3e-3, end], [0.0, peak, peak, crit, crit])    # a 0.4 mm plateau
+    dh = np.interp(u, [0, 1e-3, 3e-3, end], [rate, rate, 0.0, 0.0])
+    h = np.concatenate([[0], np.cumsum(0.5 * (dh[1:] + dh[:-1]) * np.diff(u))])
+    rng = np.random.default_rng(seed)
+    return u, r + noise * rng.standard_normal(u.size), h
+
+
+def test_element_result_recovers_known_angles_and_gives_seed_intervals():
+    runs = [(*_curve(peak=0.8 + 0.01 * k, crit=0.6, rate=0.25), 0.85 + 0.001 * k) for k in range(-2, 3)]
+    r = element_result(runs, d50=0.7e-3, normal_stress=100e3)
+    assert r.n_seeds == 5 and r.has_peak and r.note == ""
+    assert r.phi_peak_deg == pytest.approx(math.degrees(math.atan(0.8)), abs=0.5)
+    assert r.phi_cs_deg == pytest.approx(math.degrees(math.atan(0.6)), abs=0.05)
+    assert r.psi_max_deg == pytest.approx(math.degrees(math.atan(0.25)), abs=0.3)
+    assert r.phi_peak_deg_lo < r.phi_peak_deg < r.phi_peak_deg_hi
+    assert r.solid_fraction == pytest.approx(0.85) and r.solid_fraction_lo < 0.85 < r.solid_fraction_hi
+
+
+def test_element_result_says_when_there_is_no_peak_before_60_percent():
+    u = np.linspace(0, 6e-3, 600)
+    loose = [(u, 0.4 + 0.05 * u / 6e-3, -1e-2 * u, 0.80) for _ in range(3)]      # hardening, contracting
+    r = element_result(loose, d50=0.7e-3, normal_stress=100e3)
+    assert not r.has_peak and "no peak before 60%" in r.note and r.peak_disp > 0.6 * r.shear_distance
+    assert r.psi_max_deg < 0
+
+
+# ---- soil cards ------------------------------------------------------------------------------------
+def _campaign(tmp_path, case_extra: str) -> Path:
+    card = tmp_path / "soil.toml"
+    shutil.copy(DATA / "tiny_card.toml", card)
+    toml = tmp_path / "c.toml"
+    toml.write_text(f"""[campaign]\nname = "c"\nengines = ["liggghts"]\n[case]\nsoil = "soil.toml"\n
+test = "interface"\ndevice = "periodic"\nprofile = {{kind = "sawtooth", rt = 1, sw = 2, sr = 0}}\n{case_extra}
+[sweep]\nseed = [1, 2]\n""")
+    return toml
+
+
+def test_a_campaign_takes_the_soil_card_and_refuses_a_field_set_twice(tmp_path):
+    from interphase.campaign.schema import load_campaign
+    from interphase.soil import load_card
+
+    card = load_card(DATA / "tiny_card.toml")
+    c = load_campaign(_campaign(tmp_path, ""))
+    case = c.cases[0].case
+    for key in ("friction_pp", "rolling_friction", "preparation", "d50"):
+        assert getattr(case, key) == pytest.approx(card.soil[key])
+    with pytest.raises(InputError) as exc:
+        load_campaign(_campaign(tmp_path, "friction_pp = 0.3\n"))
+    text = str(exc.value)
+    assert "c.toml" in text and "friction_pp" in text and "soil.toml" in text
+
+
+# ---- bad targets -----------------------------------------------------------------------------------
+BAD = [
+    ('source = "synthetic: interphase-dem', 'source = "" # "', "source", "no source"),
+    ("phi_cs_deg = 28.0", "phi_cs_deg = 39.0", "phi_cs_deg", "exceeds"),
+    ("friction_pp = [0.3, 0.8]", "friction_pp = [0.8, 0.3]", "friction_pp", "not below"),
+    ("friction_pp = [0.3, 0.8]", "friction_ps = [0.3, 0.8]", "friction_ps", "cannot be calibrated"),
+]
+
+
+@pytest.mark.parametrize("old,new,field,words", BAD, ids=[b[2] + "-" + b[3].split()[0] for b in BAD])
+def test_a_bad_target_exits_2_naming_file_line_and_field(tmp_path, capsys, monkeypatch, old, new, field, words):
+    monkeypatch.chdir(tmp_path)
+    text = (DATA / "tiny_target.toml").read_text()
+    assert old in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(old, new, 1))
+    assert main(["calibrate", str(bad), "--quick"]) == 2
+    err = capsys.readouterr().err
+    line = next(i for i, ln in enumerate(bad.read_text().splitlines(), 1) if ln.startswith(field))
+    assert f"bad.toml:{line}" in err and field in err and words in err and "Traceback" not in err
+
+
+# ---- the real engine -----------------------------------------------------------------------------
+@pytest.mark.liggghts
+def test_element_test_runs_and_dense_preparation_is_denser(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    card = tmp_path / "soil.toml"
+    shutil.copy(DATA / "tiny_card.toml", card)
+    loose = tmp_path / "loose.toml"
+    loose.write_text(card.read_text().replace("preparation = 0.0", "preparation = 1.0").replace('"tiny-card"', '"loose"'))
+    out = {}
+    for name, path in (("dense", card), ("loose", loose)):
+        assert main(["element", str(path), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
+        out[name] = json.loads(capsys.readouterr().out)
+    d = out["dense"]
+    for k in ("phi_peak_deg", "phi_cs_deg", "psi_max_deg", "solid_fraction"):
+        assert k in d and f"{k}_lo" in d and f"{k}_hi" in d and d["n_seeds"] == 2
+    assert 10 < d["phi_cs_deg"] <= d["phi_peak_deg"] < 60
+    # frictionless deposition packs the same grains denser than deposition at their own friction
+    assert d["solid_fraction"] > out["loose"]["solid_fraction"] + 0.02
+    # again: nothing reruns, the same numbers
+    assert main(["element", str(card), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out) == d and "0 to run" in captured.err
+
+
+@pytest.mark.liggghts
+def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_path, capsys, monkeypatch):
+    from interphase.soil import load_card
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["calibrate", str(DATA / "tiny_target.toml"), "--quick", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    card = load_card(tmp_path / "soils" / "tiny.toml")
+    assert card.extra["target"]["source"].startswith("synthetic")
+    for k, (lo, hi) in {"friction_pp": (0.3, 0.8), "rolling_friction": (0.2, 0.8)}.items():
+        assert lo <= card.soil[k] <= hi and lo <= res["posterior"][k]["lo"] <= res["posterior"][k]["hi"] <= hi
+    assert res["calibration"]["runs"] == 3 + 2 * 2 and len(res["verification"]) == 1
+    assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
+    measured = json.loads(capsys.readouterr().out)
+    for a in res["achieved"]:
+        assert measured[a["quantity"]] == pytest.approx(a["value"], abs=1e-9)
