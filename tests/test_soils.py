@@ -173,3 +173,14 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     measured = json.loads(capsys.readouterr().out)
     for a in res["achieved"]:
         assert measured[a["quantity"]] == pytest.approx(a["value"], abs=1e-9)
+
+
+def test_hexatic_order_tells_a_triangular_lattice_from_a_disordered_packing():
+    from interphase.analysis.element import CRYSTALLINE_PSI6, hexatic_order
+
+    i, j = np.meshgrid(np.arange(20), np.arange(20))
+    x, z = (i + 0.5 * (j % 2)).ravel(), (j * np.sqrt(3) / 2).ravel()
+    assert hexatic_order(x, z, np.full(x.size, 0.5)) > 0.95
+    rng = np.random.default_rng(1)
+    gx, gz = rng.uniform(0, 20, 2000), rng.uniform(0, 20, 2000)      # a gas: no order
+    assert hexatic_order(gx, gz, np.full(gx.size, 0.3)) < CRYSTALLINE_PSI6

@@ -31,6 +31,8 @@ from interphase.analysis.ensemble import CRITICAL_FRACTION, GRID_POINTS, ensembl
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 PEAK_BEFORE = 0.6               # a peak must lie within this share of the shear
+CRYSTALLINE_PSI6 = 0.7          # mean hexatic order above which a specimen is crystallised (measured:
+                                # well-graded 0.50–0.52, uniform 0.84–0.88; docs/soils.md)
 DILATANCY_WINDOW_D50 = 1.0      # [D50] the straight-line fit that gives the dilation rate
 
 
@@ -58,9 +60,38 @@ class ElementResult:
     shear_distance: float           # [m] the shortest seed's shear
     has_peak: bool
     note: str = ""
+    order_psi6: float = math.nan    # mean hexatic bond order |ψ6| of the grains at the start of the shear
+
+    @property
+    def crystallised(self) -> bool:
+        return bool(self.order_psi6 > CRYSTALLINE_PSI6)
 
     def to_dict(self) -> dict:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
+
+
+def hexatic_order(x, z, radius, gap: float = 0.1) -> float:
+    """Mean over grains of |ψ6| = |mean over neighbours of exp(6iθ)| [-], neighbours being grains
+    closer than (r_i + r_j)(1 + gap), θ the bond's angle in the x–z plane. Equal discs in a
+    triangular lattice give 1; a disordered packing about 0.3–0.5. Grains with fewer than two
+    neighbours are left out. x-periodicity is ignored (edge grains lose a bond or two)."""
+    from scipy.spatial import cKDTree
+
+    pts = np.column_stack([x, z])
+    r = np.asarray(radius, float)
+    pairs = cKDTree(pts).query_pairs(2 * r.max() * (1 + gap), output_type="ndarray")
+    if not len(pairs):
+        return math.nan
+    i, j = pairs[:, 0], pairs[:, 1]
+    d = pts[j] - pts[i]
+    near = np.hypot(d[:, 0], d[:, 1]) < (r[i] + r[j]) * (1 + gap)
+    i, j, d = i[near], j[near], d[near]
+    e = np.exp(6j * np.arctan2(d[:, 1], d[:, 0]))          # a bond and its reverse give the same e
+    total = np.bincount(i, e.real, len(r)) + np.bincount(j, e.real, len(r)) \
+        + 1j * (np.bincount(i, e.imag, len(r)) + np.bincount(j, e.imag, len(r)))
+    count = np.bincount(i, minlength=len(r)) + np.bincount(j, minlength=len(r))
+    ok = count >= 2
+    return float(np.mean(np.abs(total[ok] / count[ok]))) if ok.any() else math.nan
 
 
 def _deg(x: float) -> float:
@@ -86,9 +117,10 @@ def dilation_rates(curves, d50: float, grid_points: int = GRID_POINTS) -> tuple[
     return grid, rates
 
 
-def element_result(runs, d50: float, normal_stress: float) -> ElementResult:
+def element_result(runs, d50: float, normal_stress: float, order_psi6=()) -> ElementResult:
     """The element test from its seed runs: `runs` = [(u [m], τ/σ [-], h [m], solid fraction [-]),
-    ...], one per seed (u, τ/σ, h arrays of one run's series)."""
+    ...], one per seed (u, τ/σ, h arrays of one run's series); `order_psi6`: each seed's hexatic
+    order at the start of the shear (`hexatic_order`), if known."""
     runs = [r for r in runs if np.isfinite(np.asarray(r[1], float)).sum() >= 2]
     n = len(runs)
     nan3 = (math.nan,) * 3
@@ -110,6 +142,12 @@ def element_result(runs, d50: float, normal_stress: float) -> ElementResult:
         notes.append(f"no peak before {PEAK_BEFORE:.0%} of the shear (the seed-mean curve is highest at "
                      f"{strength.peak_disp * 1e3:.2f} of {end * 1e3:.2f} mm): the specimen did not pass its critical "
                      "state, φ_peak is the curve's maximum")
+    psi6 = np.asarray([v for v in order_psi6 if math.isfinite(v)], float)
+    order = float(psi6.mean()) if psi6.size else math.nan
+    if order > CRYSTALLINE_PSI6:
+        notes.append(f"the grains crystallised (hexatic order {order:.2f} > {CRYSTALLINE_PSI6}): near-uniform discs in "
+                     "one layer order into a triangular lattice whatever the preparation, and shear along its rows; "
+                     "this is no sand (use a wider gradation)")
     if n < 2:
         notes.append("one seed: no intervals (run ≥ 3 seeds)")
     return ElementResult(
@@ -118,4 +156,4 @@ def element_result(runs, d50: float, normal_stress: float) -> ElementResult:
         _deg(strength.critical), _deg(strength.critical_lo), _deg(strength.critical_hi),
         _deg(float(np.mean(psi))), *(_deg(v) for v in t_interval(psi)),
         float(np.mean(sf)) if sf.size else math.nan, *t_interval(sf),
-        float(strength.peak_disp), end, has_peak, "; ".join(notes))
+        float(strength.peak_disp), end, has_peak, "; ".join(notes), order)

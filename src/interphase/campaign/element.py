@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import tomli_w
 
-from interphase.analysis.element import ElementResult, element_result
+from interphase.analysis.element import ElementResult, element_result, hexatic_order
 from interphase.soil import SoilCard
 
 
@@ -53,8 +53,10 @@ def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = Non
         for p in planned:
             if p.case_id in set(summ["case_id"]) if len(summ) else False:
                 try:
-                    series[p.case_id] = pd.read_parquet(store.case_folder(p.case_id) / "series.parquet",
+                    folder = store.case_folder(p.case_id)
+                    series[p.case_id] = pd.read_parquet(folder / "series.parquet",
                                                         columns=["shear_disp", "stress_ratio", "platen_z"])
+                    series[p.case_id].attrs["folder"] = str(folder)
                 except (OSError, ValueError, KeyError):
                     pass
     return planned, series, summ.set_index("case_id") if len(summ) else summ
@@ -62,7 +64,7 @@ def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = Non
 
 def element_of(cases, series: dict, summ: pd.DataFrame, d50: float, normal_stress: float) -> ElementResult:
     """The ElementResult of the planned `cases` (one physical soil at one stress, its seeds)."""
-    runs = []
+    runs, order = [], []
     for p in cases:
         s = series.get(p.case_id)
         if s is None:
@@ -70,7 +72,18 @@ def element_of(cases, series: dict, summ: pd.DataFrame, d50: float, normal_stres
         sf = float(summ.loc[p.case_id, "solid_fraction"]) if "solid_fraction" in summ.columns else np.nan
         runs.append((s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float),
                      s["platen_z"].to_numpy(float), sf))
-    return element_result(runs, d50, normal_stress)
+        order.append(_start_order(Path(s.attrs.get("folder", ""))))
+    return element_result(runs, d50, normal_stress, order)
+
+
+def _start_order(folder: Path) -> float:
+    """Hexatic order of the grains at a run's first contact snapshot (the start of its shear)."""
+    try:
+        p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "x", "z", "radius"])
+    except (OSError, ValueError, KeyError):
+        return np.nan
+    first = p[p["snapshot"] == p["snapshot"].min()]
+    return hexatic_order(first["x"].to_numpy(float), first["z"].to_numpy(float), first["radius"].to_numpy(float))
 
 
 def run_element(card: SoilCard, normal_stresses, seeds, *, output: Path | None = None, executor: str | None = None,
