@@ -20,6 +20,8 @@ File layout (SI units; [case] keys are the field names of `interphase.case.Case`
     max_concurrent = 16                # slurm array parallelism (cases running at once)
 
     [case]                             # constants of every case
+    soil = "soils/ottawa-20-30.toml"   # optional: a soil card's grain fields (interphase.soil); a field
+                                       # set here as well, or swept, is an error naming both places
     profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}   # D50 units; files: {kind="file", path=...}
     friction_ps = 0.2
 
