@@ -32,12 +32,34 @@ def test_preparation_default_keeps_every_case_id_and_names_map_to_numbers():
         Case(test="box", preparation=1.5)
 
 
-def test_yade_refuses_a_prepared_specimen_with_the_fix():
+def test_yade_runs_a_prepared_case_with_its_own_driver_and_every_other_as_before():
     from interphase.engines.yade import Yade
 
     case = Case(test="box", device="periodic", preparation=0.0, box_length_d50=12, box_height_d50=8)
-    with pytest.raises(InputError, match="LIGGGHTS"):
-        Yade().render(case)
+    files = Yade().render(case)
+    assert "yade_prepare import main" in files["driver.py"] and json.loads(files["params.json"])["preparation"] == 0
+    files = Yade().render(case.replace(preparation=1.0))
+    assert "yade_driver import main" in files["driver.py"] and "preparation" not in json.loads(files["params.json"])
+
+
+@pytest.mark.parametrize("engine", [pytest.param("liggghts", marks=pytest.mark.liggghts),
+                                    pytest.param("yade", marks=pytest.mark.yade)])
+def test_a_dense_specimen_is_deposited_frictionless_and_shears_at_the_grains_own_friction(tmp_path, engine):
+    """Both engines: at the start of the shear the grain contacts carry (almost) no tangential force
+    (deposited with friction 0), by its end the sliding ones sit at the grains' μ = 0.5."""
+    import pandas as pd
+
+    toml = tmp_path / "dense.toml"
+    toml.write_text('[case]\ntest = "box"\ndevice = "periodic"\ngradation = "poly"\nshear_modulus = 50e6\n'
+                    'friction_pp = 0.5\nrolling_friction = 0.3\npreparation = "dense"\nshear_velocity = 0.05\n'
+                    'shear_distance = 0.0015\nsnapshot_every = 0.0005\nbox_length_d50 = 12.0\nbox_height_d50 = 8.0\n')
+    assert main(["run-case", str(toml), "-o", str(tmp_path / "run"), "--engine", engine]) == 0
+    c = pd.read_parquet(tmp_path / "run" / "contacts.parquet", columns=["snapshot", "kind", "fn", "ft"])
+    pp = c[(c["kind"] == "pp") & (c["fn"] > 0)]
+    ratio = (pp["ft"].abs() / pp["fn"]).groupby(pp["snapshot"])
+    first, last = ratio.quantile(0.9).iloc[0], ratio.quantile(0.95).iloc[-1]
+    # (the engines' dumped tangential forces carry their damping terms: a few read above μ)
+    assert first < 0.05 and 0.4 < last < 0.6
 
 
 def test_liggghts_deck_deposits_with_scaled_friction_and_restores_it_for_the_shear():

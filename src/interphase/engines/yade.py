@@ -18,7 +18,6 @@ from pathlib import Path
 import interphase
 from interphase import __version__
 from interphase.case import Case
-from interphase.errors import InputError
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device
 from interphase.engines.render import environment
@@ -105,13 +104,13 @@ class Yade(Engine):
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
-        if case.preparation != 1.0:
-            raise InputError(f"preparation {case.preparation:g} is not built for YADE: its driver deposits and "
-                             "consolidates at the grains' own friction", where="case.preparation",
-                             fix="run prepared specimens with LIGGGHTS, or set preparation = 1 (\"loose\") for YADE")
         dev = device(case, self.recipe)
-        return {"driver.py": environment(self.templates).get_template(self.template_name(case)).render(),
-                "params.json": json.dumps(driver_input(dev), indent=None, allow_nan=False),
+        # a prepared specimen (Case.preparation < 1) runs engines/yade_prepare.py's driver; every other
+        # case's driver.py and params.json stay as they were (and so do their ids)
+        prepared = {"prepared": True} if case.preparation != 1.0 else {}
+        params = driver_input(dev) | ({"preparation": case.preparation} if prepared else {})
+        return {"driver.py": environment(self.templates).get_template(self.template_name(case)).render(**prepared),
+                "params.json": json.dumps(params, indent=None, allow_nan=False),
                 RECIPE_FILE: dev.record(self.name).to_json()}
 
     def template_name(self, case: Case) -> str:
