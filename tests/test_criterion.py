@@ -206,3 +206,17 @@ def test_figs_6_7_and_6_8_take_the_well_graded_cases_when_both_gradations_ran():
         assert (subset(skewed, SPECS[key])["gradation"] == "poly").all()
     assert (subset(skewed, SPECS["fig6_10a"])["gradation"] == "mono").sum() == mono.sum()   # 6.10a: both
     assert len(subset(skewed[mono], SPECS["fig6_8"])) > 0        # uniform grains alone keep their cases
+
+
+def test_skill_puts_the_criterion_beside_its_baselines_on_the_same_cases():
+    import pandas as pd
+
+    from interphase.analysis.criterion import skill
+
+    df = pd.DataFrame({"error_deg": [1.0, -1.0, 3.0, float("nan")], "error_soil_deg": [0.0, 0.0, 10.0, 1.0],
+                       "error_rule_deg": [2.0, 2.0, 5.0, 1.0], "mobilised": [True, True, False, False]})
+    s = skill(df).set_index(["subset", "predictor"])
+    assert s.loc[("all", "criterion"), "n"] == 3                     # the NaN case is left out of every row
+    assert s.loc[("all", "criterion"), "rms_deg"] == pytest.approx((11 / 3) ** 0.5)
+    assert s.loc[("not fully mobilised", "δ = φ (the soil's own)"), "within_4deg"] == 0.0
+    assert s.loc[("fully mobilised", "δ = min(φμ + θa, φ) (no fit)"), "mean_deg"] == 2.0

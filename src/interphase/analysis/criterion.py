@@ -378,7 +378,39 @@ def check_cases(model: CriterionModel, points: pd.DataFrame) -> pd.DataFrame:
     deg = lambda t: np.degrees(np.arctan(pd.to_numeric(t, errors="coerce")))
     df["delta_predicted_deg"], df["delta_measured_deg"] = deg(df["tan_delta_predicted"]), deg(df["tan_delta_measured"])
     df["error_deg"] = df["delta_predicted_deg"] - df["delta_measured_deg"]
+    # the two baselines a criterion must beat (docs/reproduction.md): the soil's own strength on every
+    # surface, and a rule with no fit at all, δ = min(φμ + θa, φ)
+    soil = deg(df["tan_phi"])
+    rule = np.minimum(np.degrees(np.arctan(df["friction_ps"])) + df["theta_a_deg_92"], soil)
+    df["error_soil_deg"] = soil - df["delta_measured_deg"]
+    df["error_rule_deg"] = rule - df["delta_measured_deg"]
+    df["mobilised"] = pd.to_numeric(df["E_measured"], errors="coerce") >= FULLY_MOBILISED_E
     return df
+
+
+#: a case counts as fully mobilised when its measured E (seed means) reaches this
+FULLY_MOBILISED_E = 0.95
+PREDICTORS = {"error_deg": "criterion", "error_soil_deg": "δ = φ (the soil's own)",
+              "error_rule_deg": "δ = min(φμ + θa, φ) (no fit)"}
+
+
+def skill(df: pd.DataFrame) -> pd.DataFrame:
+    """The criterion beside its two baselines (PREDICTORS), on all cases, on the fully mobilised ones
+    (E measured ≥ FULLY_MOBILISED_E) and on the rest: per predictor and subset, n, rms and mean error [°
+    of δ] and the share within 4°. Only cases all three predict are counted, so that each row
+    compares the same cases."""
+    rows = []
+    cols = [c for c in PREDICTORS if c in df]
+    ok = df.dropna(subset=cols)
+    full = ok["mobilised"].astype(bool)
+    for subset, part in (("all", ok), ("fully mobilised", ok[full]), ("not fully mobilised", ok[~full])):
+        for c in cols:
+            e = pd.to_numeric(part[c], errors="coerce")
+            rows.append({"subset": subset, "predictor": PREDICTORS[c], "n": int(len(e)),
+                         "rms_deg": float(np.sqrt(np.mean(e ** 2))) if len(e) else math.nan,
+                         "mean_deg": float(e.mean()) if len(e) else math.nan,
+                         "within_4deg": float((e.abs() < 4.0).mean()) if len(e) else math.nan})
+    return pd.DataFrame(rows)
 
 
 def check_summary(df: pd.DataFrame) -> dict:

@@ -27,7 +27,7 @@ import pandas as pd
 
 from interphase import __version__
 from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
-from interphase.analysis.criterion import CriterionModel, check_cases, check_summary, fitted_soil_tan_phi
+from interphase.analysis.criterion import CriterionModel, check_cases, check_summary, fitted_soil_tan_phi, skill
 from interphase.errors import InputError
 from interphase.report import figures as F
 from interphase.report import tables as T
@@ -101,6 +101,9 @@ def check_notes(checks: pd.DataFrame) -> list[str]:
                      f"{s['p5']:+.2f}° to {s['p95']:+.2f}°, {100 * s['within_4deg']:.0f} % within 4°, largest miss "
                      f"{s['max_abs']:.2f}° ({s['worst_case']}, {s['worst_group']})"
                      + (f"; {s['n_without']} case(s) outside the chain's reach" if s["n_without"] else ""))
+        for r in skill(g).itertuples():
+            notes.append(f"{fold}, {r.subset}: {r.predictor}: {r.n} cases, rms {r.rms_deg:.2f}°, "
+                         f"{100 * r.within_4deg:.0f} % within 4°")
     return notes
 
 
