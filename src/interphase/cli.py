@@ -222,25 +222,42 @@ def _add_engine(sub) -> None:
                       ("run-case", "render, run and read one case; print where its results are")):
         p = sub.add_parser(cmd, help=text)
         p.add_argument("case", help="TOML file with a [case] table (Case fields, SI units)")
-        p.add_argument("-o", "--output", required=True, help="case folder to write")
+        p.add_argument("-o", "--output", required=True,
+                       help="the case folder to write: new or empty" + (
+                           "; never a case folder (nothing finished is overwritten)" if cmd == "render" else
+                           ", or this same case's folder (finished: read back, not rerun)"))
         p.add_argument("--engine", default="liggghts", help="liggghts | yade")
         p.add_argument("--json", action="store_true", help="print JSON")
         p.set_defaults(func=_cmd_render if cmd == "render" else _cmd_run_case)
 
 
 def _load_case(path: str):
+    """(Case, warnings) of a case file: the checks `campaign run` makes on a campaign's cases."""
+    from interphase.campaign.checks import case_file_warnings
     from interphase.case import load_case_file
 
-    return load_case_file(path)
+    case = load_case_file(path)
+    warnings = case_file_warnings(path, case)
+    return case, warnings
+
+
+def _warn(warnings, as_json: bool) -> None:
+    """Warnings on stderr (stdout stays parseable with --json)."""
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
 
 
 def _cmd_render(args) -> int:
+    from interphase.campaign.guard import check_render_folder
     from interphase.engines.base import get_engine
 
     engine = get_engine(args.engine)
-    files = engine.write_input(_load_case(args.case), args.output)
+    case, warnings = _load_case(args.case)
+    check_render_folder(args.output)
+    _warn(warnings, args.json)
+    files = engine.write_input(case, args.output)
     if args.json:
-        _print_json({"folder": args.output, "files": sorted(files)})
+        _print_json({"folder": args.output, "files": sorted(files), "warnings": warnings})
     else:
         print("\n".join(f"{args.output}/{name}" for name in sorted(files)))
     return 0
@@ -252,20 +269,27 @@ def _cmd_run_case(args) -> int:
     from interphase.campaign.runner import run_single
 
     folder = Path(args.output)
-    res = run_single(_load_case(args.case), args.engine, folder)
+    case, warnings = _load_case(args.case)
+    _warn(warnings, args.json)
+    res = run_single(case, args.engine, folder)
     if res["status"] != "done":
         print(f"campaign run-case: {args.engine} {res['status']}: {res['cause']}: {res['message']}", file=sys.stderr)
         return 1
+    if res["skipped"]:
+        print(f"campaign run-case: {folder} already holds this case, finished: its result is read back, "
+              "nothing was rerun", file=sys.stderr)
     row = res["summary"]
     out = {"folder": str(folder), "skipped": res["skipped"], "summary": str(folder / "summary.json"),
            **{name: str(folder / f"{name}.parquet") for name in ("contacts", "history", "particles", "series")},
            **{k: row.get(k) for k in ("peak_stress_ratio", "shear_disp_at_peak", "peak_at_end", "peak_snapshot",
-                                      "theta_r_surface_deg", "theta_r_surface_mean_deg", "surface_force_angle_deg")}}
+                                      "theta_r_surface_deg", "theta_r_surface_mean_deg", "surface_force_angle_deg")},
+           "warnings": warnings}
     if args.json:
         _print_json(out)
     else:
         for k, v in out.items():
-            print(f"{k:24s} {v}")
+            if k != "warnings":
+                print(f"{k:24s} {v}")
     return 0
 
 

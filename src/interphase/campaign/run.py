@@ -28,7 +28,7 @@ from pathlib import Path
 
 from interphase.campaign import store as st
 from interphase.campaign.executors import LocalExecutor, SlurmExecutor, Task
-from interphase.campaign.plan import PlannedCase, plan, rate_warnings, time_limit_minutes
+from interphase.campaign.plan import PlannedCase, plan, time_limit_minutes
 from interphase.campaign.progress import Progress
 from interphase.campaign.runner import Interrupted
 from interphase.campaign.schema import EXECUTORS, Campaign, load_campaign
@@ -164,7 +164,7 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         raise InputError(f"must be ≥ 0 (0 = one per core), got {jobs}", where="--jobs")
     planned = plan(campaign, [engine] if engine else None)
     report = RunReport(campaign.name, campaign.output, planned=len(planned))
-    for w in rate_warnings([p.case for p in planned]):
+    for w in campaign.warnings():
         print(f"warning: {w}", file=stream, flush=True)
     builds = engine_builds(p.engine for p in planned)
     if dry_run:

@@ -115,6 +115,14 @@ class Campaign:
     execution: Execution = field(default_factory=Execution)
     description: str = ""
     specimen_from: str | None = None    # the engine whose consolidated specimens the others shear
+    stated: tuple[str, ...] = ()        # Case fields the file states ([case], groups, sweeps, zips)
+
+    def warnings(self) -> list[str]:
+        """Implausible values and unstated converged settings (interphase.campaign.checks), one line
+        each: what `campaign run`, its dry run and `campaign status` print before anything else."""
+        from interphase.campaign.checks import default_notes, input_warnings
+
+        return input_warnings([c.case for c in self.cases]) + default_notes(self.stated)
 
     @property
     def pairs(self) -> list[tuple[int, int]]:
@@ -313,7 +321,8 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             role = "interface" if case.test == "interface" else "box"
             cases.append(CampaignCase(case, gname, role, tuple((k, _freeze(v)) for k, v, _ in values)))
     cases = _add_pairs(ctx, data.get("pairs", {}), cases, seen)
-    return Campaign(name=name, path=path.resolve(), engines=engines, groups=tuple(groups), cases=tuple(cases),
+    stated = set(top_case) | {k for g in groups_spec for k in g[2]} | {v.split(".")[0] for g in groups for v in g.variables}
+    return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines, groups=tuple(groups), cases=tuple(cases),
                     output=out.resolve() if not out.is_absolute() else out, execution=execution,
                     description=description, specimen_from=specimen_from)
 
@@ -490,8 +499,12 @@ _UNKNOWN_IN_MSG = re.compile(r"unknown (?:key|parameter) '([^']+)'")
 
 def _build_case(ctx: _Ctx, data: dict, base_dir: Path, values, gpath: tuple) -> Case:
     """case_from_dict, with its message re-anchored at the TOML line that supplied the bad field."""
+    from interphase.campaign.checks import input_errors
+
     try:
-        return case_from_dict(data, where="case", base_dir=base_dir)
+        case = case_from_dict(data, where="case", base_dir=base_dir)
+        input_errors([case], where="case")
+        return case
     except InputError as exc:
         msg = str(exc)
         m = _FIELD_IN_MSG.search(msg)
