@@ -44,6 +44,7 @@ test: deps
 run: deps
 	$(VENV)/bin/campaign run campaigns/quick.toml
 	$(VENV)/bin/campaign report campaigns/quick.toml
+	@echo "the campaign command is $(VENV)/bin/campaign: call it so, or first 'source $(VENV)/bin/activate'"
 
 # each benchmark prints its own Markdown table for BENCHMARKS.md
 bench: deps

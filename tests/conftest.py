@@ -37,6 +37,7 @@ def quick_campaign(tmp_path_factory) -> Path:
     text = (ROOT / "campaigns" / "quick.toml").read_text()
     toml = tmp / "quick.toml"
     text = text.split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5, 1]\nfriction_ps = [0.2]\nseed = [1, 2]\n"
+    text = "\n".join(line for line in text.splitlines() if not line.startswith("output ="))
     toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
     assert main(["run", str(toml)]) == 0
     return toml

@@ -196,7 +196,9 @@ def test_dry_run_lists_and_renders_without_running(campaign, capsys):
     rc = main(["run", str(campaign), "--dry-run"])
     text = capsys.readouterr().out
     out = campaign.parent / "out"
-    assert rc == 0 and text.count("  run  ") == 6
+    assert rc == 0 and text.count("  run  ") == 6 and "6 cases: 6 run" in text
+    assert not (out / ".dry-run").exists()             # decks only when asked
+    assert main(["run", str(campaign), "--dry-run", "--render"]) == 0
     decks = list((out / ".dry-run").glob("*/in.deck"))
     assert len(decks) == 6
     assert _folders(out) == []          # nothing ran, nothing indexed as started

@@ -302,6 +302,8 @@ def test_specimen_from_starts_the_other_engine_from_the_source_run(tmp_path, cap
             assert p.case_id != own[p.label] and p.params["start"] == f"liggghts:{src.case_id}"
             assert p.case.replace(start=None) == src.case          # the same physical case
     f.write_text(SAME_SPECIMEN)
-    assert main(["run", str(f), "--output", str(tmp_path / "out"), "--dry-run"]) == 0
+    assert main(["run", str(f), "--runs", str(tmp_path / "out"), "--dry-run", "--render"]) == 0
     out = capsys.readouterr().out
-    assert out.count("starts from liggghts:") == 2 and out.count("files;") == 2
+    assert out.count("starts from liggghts:") == 2 and out.count("  run  ") == 4
+    # the two liggghts runs are rendered, the two that start from them are not (their specimen is not made)
+    assert len(list((tmp_path / "out" / ".dry-run").glob("*/in.deck"))) == 2

@@ -6,6 +6,8 @@ import os
 import pandas as pd
 import pytest
 
+from interphase.campaign.run import campaign_status
+
 from interphase.campaign import plan as plan_mod
 
 
@@ -45,9 +47,17 @@ def test_status_table_fits_80_columns(quick_campaign, monkeypatch, capsys):
 
     monkeypatch.setenv("COLUMNS", "80")
     assert main(["status", str(quick_campaign)]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == 2 + 6                      # title, header, one line per case
-    assert max(len(line.rstrip()) for line in lines) <= 80
+    text = capsys.readouterr().out
+    lines = text.splitlines()
+    _, _, df = campaign_status(quick_campaign)
+    rows = [ln for ln in lines if ln[:8] in {str(c)[:8] for c in df["case_id"]}]
+    assert len(rows) == 6 and lines[0].startswith("quick: 6 done")
+    assert str(quick_campaign.parent / "runs") in text                 # the folder it read, whole
+    # every line fits, except one holding a path (never cut; a terminal folds it)
+    assert all(len(ln.rstrip()) <= 80 for ln in lines if "/" not in ln)
+    # labels keep the part that tells cases apart (issue 32: `-mu0.2-poly-s1` was cut off)
+    for r in df.itertuples():
+        assert any(ln.startswith(str(r.case_id)[:8]) and r.label.split("-", 2)[-1][-20:] in ln for ln in rows), r.label
 
 
 @pytest.mark.liggghts
@@ -59,7 +69,7 @@ def test_report_reads_runs_written_elsewhere(quick_campaign, tmp_path, monkeypat
     mine = tmp_path / "quick.toml"
     mine.write_text(text)
     runs = quick_campaign.parent / "runs"
-    assert main(["report", str(mine), "--output", str(runs), "--out", str(tmp_path / "rep"), "--bootstrap", "9"]) == 0
+    assert main(["report", str(mine), "--runs", str(runs), "--output", str(tmp_path / "rep"), "--bootstrap", "9"]) == 0
     assert len(pd.read_csv(tmp_path / "rep" / "tables" / "summaries.csv")) == 6
     monkeypatch.chdir(tmp_path)                          # ./runs/quick (the default) is not there
     assert main(["report", str(mine), "--out", str(tmp_path / "rep2")]) == 2

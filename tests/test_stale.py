@@ -66,7 +66,7 @@ def test_a_recipe_change_flags_keeps_and_reruns_exactly_the_stale_cases(one_seed
         assert not set(df.index) & set(before.index)                       # new ids
         assert (df["status"] == "stale").all() and (df["cause"] == "recipe").all()
         assert all(f"folder {cid}" in m for cid, m in zip(before.index, df["message"])), df["message"].tolist()
-        assert main(["status", str(toml), "--output", str(out)]) == 0
+        assert main(["status", str(toml), "--runs", str(out)]) == 0
         assert "2 stale (recipe)" in capsys.readouterr().out
 
         # the report would use the earlier recipe (no run of this one) and say so: the runs and notes

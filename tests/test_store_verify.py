@@ -54,14 +54,14 @@ def test_truncated_table_is_corrupt_unused_and_rerun(runs, capsys):
     assert str(path) in row["message"] and "--rerun-failed" in row["message"]
     assert (df.drop(index=cid)["status"] == "done").all()
     # the CLI: counted and listed as corrupt, the message (path, fix) in --json
-    assert main(["status", str(toml), "--output", str(out)]) == 0
+    assert main(["status", str(toml), "--runs", str(out)]) == 0
     text = capsys.readouterr().out
     line, why = [ln for ln in text.splitlines() if ln.startswith(cid[:8])]   # its table row, then its message
     assert "1 corrupt" in text and "corrupt" in line
     # the message wraps between words only: the whole path stays on one line, however long
     assert why.startswith(f"{cid[:8]} corrupt:") and any(str(path) in ln for ln in text.splitlines())
     assert "--rerun-failed" in text
-    assert main(["status", str(toml), "--output", str(out), "--json"]) == 0
+    assert main(["status", str(toml), "--runs", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     (case,) = [c for c in data["cases"] if c["case_id"] == cid]
     assert case["status"] == "corrupt" and "contacts.parquet" in case["message"]
@@ -77,7 +77,8 @@ def test_truncated_table_is_corrupt_unused_and_rerun(runs, capsys):
     text = _dry(toml, out, capsys, "--rerun-failed")
     rerun = [ln for ln in text.splitlines() if cid in ln]
     assert rerun and rerun[0].split()[:2] == ["rerun", "(corrupt)"]
-    assert text.count("skip (done)") == len(df) - 1
+    assert sum(ln.split()[:2] == ["skip", "(done)"] for ln in text.splitlines()) == len(df) - 1
+    assert f"{len(df)} cases: 1 rerun (corrupt), {len(df) - 1} skip (done)" in text       # the tallies
     # for real: only that case runs; its folder is cleaned first, its history kept
     starts = (out / cid / "attempts.jsonl").read_text().count('"event": "start"')
     assert main(["run", str(toml), "--output", str(out), "--plain"]) == 1       # kept: not all done

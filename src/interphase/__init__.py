@@ -1,8 +1,26 @@
 """interphase-dem: DEM interface-shear campaigns and the anisotropy-based failure criterion.
 
+The Python API (interphase.api; the `campaign` command does the same):
+
+    import interphase as ip
+    c = ip.load_campaign("campaigns/quick.toml")    # checked, nothing runs; c.output = its runs folder
+    ip.plan(c)                                      # the planned runs with their case ids
+    ip.run(c)                                       # run what is not finished (resumable)
+    ip.status(c)                                    # DataFrame: one row per planned case
+    ip.summaries(c)                                 # DataFrame: one row per finished run
+    ip.ensembles(c)                                 # DataFrame: one row per physical case (seeds pooled)
+    ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # θa → θr → E → tan δ
+An example that runs end to end: docs/api_example.py.
+
 Units are SI inside the code (m, N, Pa, s, radians); profile generators take sizes in D50 units.
 Angles follow docs/methods.md §0: θ counterclockwise from +x, ψ = θ − 90° (tilt from vertical, positive
 toward −x, the shear-resisting side); public outputs name which reading they carry.
+Bad input raises interphase.errors.InputError (the file, the field and the fix).
 """
 
+from interphase.api import ensembles, load_campaign, plan, predict, run, status, summaries
+from interphase.errors import InputError
+
 __version__ = "0.1.0"
+__all__ = ["load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "InputError",
+           "__version__"]

@@ -129,8 +129,10 @@ class Case:
         if self.n_grains is not None and (isinstance(self.n_grains, bool) or not isinstance(self.n_grains, int)
                                           or self.n_grains < 2):
             bad("n_grains", f"must be an integer ≥ 2 or omitted, got {self.n_grains!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
-            bad("seed", f"must be an integer, got {self.seed!r}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed < 2**63:
+            # the packing's numpy generator takes non-negative integers only
+            bad("seed", f"must be an integer ≥ 0 (the packing's random seed), got {self.seed!r}",
+                "use 1, 2, 3, …")
         if self.test == "interface" and not self.periodic and self.box_length_d50 < 4 * WALL_ZONE_D50:
             bad("box_length_d50", f"{self.box_length_d50!r} leaves less than half the box to measure in "
                 f"({WALL_ZONE_D50:g} D50 next to each side wall are left out)", f"use ≥ {4 * WALL_ZONE_D50:g}")
@@ -367,4 +369,8 @@ def load_case_file(path) -> Case:
         raise InputError(f"TOML syntax error: {exc}", where=str(path)) from None
     if "case" not in data or not isinstance(data["case"], dict):
         raise InputError("no [case] table", where=str(path), fix="put the Case fields under [case]")
-    return case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
+    from interphase.campaign.checks import input_errors
+
+    case = case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
+    input_errors([case], where=f"{path}: [case]: case")
+    return case

@@ -222,25 +222,42 @@ def _add_engine(sub) -> None:
                       ("run-case", "render, run and read one case; print where its results are")):
         p = sub.add_parser(cmd, help=text)
         p.add_argument("case", help="TOML file with a [case] table (Case fields, SI units)")
-        p.add_argument("-o", "--output", required=True, help="case folder to write")
+        p.add_argument("-o", "--output", required=True,
+                       help="the case folder to write: new or empty" + (
+                           "; never a case folder (nothing finished is overwritten)" if cmd == "render" else
+                           ", or this same case's folder (finished: read back, not rerun)"))
         p.add_argument("--engine", default="liggghts", help="liggghts | yade")
         p.add_argument("--json", action="store_true", help="print JSON")
         p.set_defaults(func=_cmd_render if cmd == "render" else _cmd_run_case)
 
 
 def _load_case(path: str):
+    """(Case, warnings) of a case file: the checks `campaign run` makes on a campaign's cases."""
+    from interphase.campaign.checks import case_file_warnings
     from interphase.case import load_case_file
 
-    return load_case_file(path)
+    case = load_case_file(path)
+    warnings = case_file_warnings(path, case)
+    return case, warnings
+
+
+def _warn(warnings, as_json: bool) -> None:
+    """Warnings on stderr (stdout stays parseable with --json)."""
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
 
 
 def _cmd_render(args) -> int:
+    from interphase.campaign.guard import check_render_folder
     from interphase.engines.base import get_engine
 
     engine = get_engine(args.engine)
-    files = engine.write_input(_load_case(args.case), args.output)
+    case, warnings = _load_case(args.case)
+    check_render_folder(args.output)
+    _warn(warnings, args.json)
+    files = engine.write_input(case, args.output)
     if args.json:
-        _print_json({"folder": args.output, "files": sorted(files)})
+        _print_json({"folder": args.output, "files": sorted(files), "warnings": warnings})
     else:
         print("\n".join(f"{args.output}/{name}" for name in sorted(files)))
     return 0
@@ -252,24 +269,35 @@ def _cmd_run_case(args) -> int:
     from interphase.campaign.runner import run_single
 
     folder = Path(args.output)
-    res = run_single(_load_case(args.case), args.engine, folder)
+    case, warnings = _load_case(args.case)
+    _warn(warnings, args.json)
+    res = run_single(case, args.engine, folder)
     if res["status"] != "done":
         print(f"campaign run-case: {args.engine} {res['status']}: {res['cause']}: {res['message']}", file=sys.stderr)
         return 1
+    if res["skipped"]:
+        print(f"campaign run-case: {folder} already holds this case, finished: its result is read back, "
+              "nothing was rerun", file=sys.stderr)
     row = res["summary"]
     out = {"folder": str(folder), "skipped": res["skipped"], "summary": str(folder / "summary.json"),
            **{name: str(folder / f"{name}.parquet") for name in ("contacts", "history", "particles", "series")},
            **{k: row.get(k) for k in ("peak_stress_ratio", "shear_disp_at_peak", "peak_at_end", "peak_snapshot",
-                                      "theta_r_surface_deg", "theta_r_surface_mean_deg", "surface_force_angle_deg")}}
+                                      "theta_r_surface_deg", "theta_r_surface_mean_deg", "surface_force_angle_deg")},
+           "warnings": warnings}
     if args.json:
         _print_json(out)
     else:
         for k, v in out.items():
-            print(f"{k:24s} {v}")
+            if k != "warnings":
+                print(f"{k:24s} {v}")
     return 0
 
 
 # ---- campaigns: run, status, crosscheck --------------------------------------------------------
+RUNS_HELP = ("the campaign's runs folder (default: the file's [campaign] output, relative to the file, else "
+             "runs/NAME beside the file)")
+
+
 def _add_campaign(sub) -> None:
     p = sub.add_parser("run", help="run a campaign (skips finished cases; resumable; local pool or SLURM)")
     p.add_argument("campaign", help="campaign file (TOML)")
@@ -281,9 +309,14 @@ def _add_campaign(sub) -> None:
     p.add_argument("--rerun-failed", action="store_true", help="run failed and SLURM-killed cases again")
     p.add_argument("--rerun-stale", action="store_true",
                    help="run again the cases finished under another recipe or engine build (see `campaign status`)")
-    p.add_argument("--dry-run", action="store_true", help="list what would run and render the decks; run nothing")
-    p.add_argument("--output", default=None, help="output folder (default: the file's [campaign].output, else runs/NAME)")
+    p.add_argument("--dry-run", action="store_true", help="the count, a sample and what would run; run nothing")
+    p.add_argument("--render", action="store_true", help="with --dry-run: write the decks of the cases that would run")
+    p.add_argument("--list", action="store_true", dest="list_all", help="with --dry-run: list every case, not a sample")
+    p.add_argument("--yes", action="store_true", help="go on with a campaign of more than 10000 cases")
+    p.add_argument("--runs", "--output", dest="runs", default=None, metavar="DIR",
+                   help=RUNS_HELP + "; --output is the same: what `run` writes")
     p.add_argument("--plain", action="store_true", help="plain progress lines even on a terminal")
+    p.add_argument("--json", action="store_true", help="progress on stderr, then one JSON summary on stdout")
     p.add_argument("--restore", default=None, metavar="SUMMARIES_CSV",
                    help="first bring back the finished runs of a summaries table (`campaign report`'s "
                         "tables/summaries.csv, e.g. a committed copy) whose case ids this campaign plans: "
@@ -293,7 +326,7 @@ def _add_campaign(sub) -> None:
     p = sub.add_parser("status", help="state of every case of a campaign, with failure causes")
     p.add_argument("campaign", help="campaign file (TOML)")
     p.add_argument("--engine", default=None, help="the engine the campaign ran with, if not the file's")
-    p.add_argument("--output", default=None, help="output folder (default: as in `campaign run`)")
+    p.add_argument("--runs", default=None, metavar="DIR", help=RUNS_HELP)
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_campaign_status)
 
@@ -303,37 +336,41 @@ def _cmd_campaign_run(args) -> int:
 
     report = run_campaign(args.campaign, engine=args.engine, executor=args.executor, jobs=args.jobs,
                           rerun_failed=args.rerun_failed, rerun_stale=args.rerun_stale, dry_run=args.dry_run,
-                          output=args.output, restore=args.restore,
-                          live=False if args.plain else None)
-    return 0 if args.dry_run else report.exit_code
+                          output=args.runs, restore=args.restore, yes=args.yes, render=args.render,
+                          list_all=args.list_all, stream=sys.stderr if args.json else None,
+                          live=False if (args.plain or args.json) else None)
+    code = 0 if args.dry_run else report.exit_code
+    if args.json:
+        counts: dict = {}
+        for status in report.statuses.values():
+            counts[status] = counts.get(status, 0) + 1
+        _print_json({"campaign": report.campaign, "runs": str(report.output), "dry_run": args.dry_run,
+                     "planned": report.planned, "counts": counts, "ran": report.ran,
+                     "interrupted": report.interrupted, "exit_code": code})
+    return code
 
 
 def _cmd_campaign_status(args) -> int:
     from interphase.campaign.run import campaign_status
 
-    campaign, planned, df = campaign_status(args.campaign, output=args.output, engine=args.engine)
+    campaign, planned, df = campaign_status(args.campaign, output=args.runs, engine=args.engine)
+    if not campaign.output.is_dir():
+        raise InputError(f"the runs folder {campaign.output} does not exist ({campaign.output_from})",
+                         where=args.campaign, fix=f"run `campaign run {args.campaign}` first, or give --runs DIR "
+                         "where its runs are")
     counts = df["status"].value_counts().to_dict()
     if args.json:
-        _print_json({"campaign": campaign.name, "output": str(campaign.output), "counts": counts,
+        _print_json({"campaign": campaign.name, "runs": str(campaign.output), "runs_from": campaign.output_from,
+                     "counts": counts,
                      "cases": df.astype(object).where(df.notna(), None).to_dict(orient="records")})
         return 0
-    from rich.console import Console
-    from rich.table import Table
+    import shutil
 
-    # one line per case in 80 columns: short ids, labels cut at the end (full ids, labels and
-    # messages in --json)
-    console = Console()
-    width = max(80, min(console.width, 120))
-    table = Table(title=f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())),
-                  box=None, pad_edge=False, title_justify="left", width=width)
-    table.add_column("id", no_wrap=True, min_width=8)
-    table.add_column("engine", no_wrap=True, min_width=8)
-    table.add_column("label", no_wrap=True, overflow="ellipsis", ratio=1)
-    table.add_column("status", no_wrap=True, min_width=9)
-    table.add_column("cause", no_wrap=True, overflow="ellipsis", max_width=14)
-    for r in df.itertuples():
-        table.add_row(str(r.case_id)[:8], r.engine, r.label, r.status, r.cause if isinstance(r.cause, str) else "")
-    console.print(table, width=width, crop=True)
+    width = max(80, min(shutil.get_terminal_size((80, 24)).columns, 120))
+    print(_wrap(f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())), width))
+    print(_wrap(f"runs folder {campaign.output} ({campaign.output_from})", width))
+    for line in status_rows(df, width):
+        print(line)
     bad = df[df["status"].isin(("corrupt", "failed"))]
     for r in bad.itertuples():       # what is wrong and the fix, under the table (wrapped, not cut)
         if isinstance(r.message, str) and r.message:
@@ -343,6 +380,35 @@ def _cmd_campaign_status(args) -> int:
         print(_wrap(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
                     width))
     return 0
+
+
+def status_rows(df, width: int = 80) -> list[str]:
+    """One line per case in `width` columns: short id, engine, label, status, cause. A label too long
+    for its column loses the start it shares with the other labels (`…` in its place), then, if
+    still too long, more of its start: the end, which tells cases apart (`-mu0.2-poly-s1`), stays.
+    Full ids, labels and messages: `campaign status --json`."""
+    labels = [str(x) for x in df["label"]] if len(df) else []
+    room = width - (8 + 1 + 8 + 1 + 1 + 11 + 1 + 14)
+    common = _common_prefix(labels) if len(labels) > 1 else ""
+    lines = [f"{'id':<8} {'engine':<8} {'label':<{room}} {'status':<11} cause"]
+    for r in df.itertuples():
+        label = str(r.label)
+        if len(label) > room and common:
+            label = "…" + label[len(common):]
+        if len(label) > room:
+            label = "…" + label[len(label) - room + 1:]
+        cause = r.cause if isinstance(r.cause, str) else ""
+        lines.append(f"{str(r.case_id)[:8]:<8} {str(r.engine)[:8]:<8} {label:<{room}} {str(r.status)[:11]:<11} "
+                     f"{cause[:14]}".rstrip())
+    return lines
+
+
+def _common_prefix(labels: list[str]) -> str:
+    """The start every label shares, cut back to a '-' (whole label parts only)."""
+    import os
+
+    prefix = os.path.commonprefix(labels)
+    return prefix[:prefix.rfind("-") + 1] if "-" in prefix else ""
 
 
 def _wrap(text: str, width: int) -> str:
@@ -360,7 +426,8 @@ def _add_crosscheck(sub) -> None:
                        "(agree / differ / undecided per metric)")
     p.add_argument("campaign", help="campaign file (TOML) with an optional [crosscheck] table of tolerances")
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: the file's, else one per core)")
-    p.add_argument("--output", default=None, help="output folder (default: as in `campaign run`)")
+    p.add_argument("--runs", "--output", dest="runs", default=None, metavar="DIR",
+                   help=RUNS_HELP + "; --output is the same: what `crosscheck` writes (and crosscheck.csv there)")
     p.add_argument("--rerun-failed", action="store_true", help="run failed cases again")
     p.add_argument("--no-run", action="store_true", help="compare what has finished; run nothing")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -371,7 +438,7 @@ def _cmd_crosscheck(args) -> int:
     """Exit 0 if every judged metric agrees (paired seed ensembles) and every case finished, else 1."""
     from interphase.campaign.crosscheck import crosscheck
 
-    report = crosscheck(args.campaign, jobs=args.jobs, output=args.output, rerun_failed=args.rerun_failed,
+    report = crosscheck(args.campaign, jobs=args.jobs, output=args.runs, rerun_failed=args.rerun_failed,
                         run=not args.no_run, stream=sys.stderr if args.json else sys.stdout)
     if args.json:
         _print_json(report.to_json())
@@ -387,9 +454,9 @@ def _cmd_crosscheck(args) -> int:
 def _add_report(sub) -> None:
     p = sub.add_parser("report", help="tables (CSV/Markdown/LaTeX), figures 6.3–6.10 (PNG/PDF), fits and an HTML page")
     p.add_argument("campaign", help="campaign file (TOML) whose cases have run")
-    p.add_argument("--out", default=None, help="report folder (default: the campaign's output folder/report)")
-    p.add_argument("--output", default=None, help="the campaign's runs folder, if not where the file says "
-                   "(as given to `campaign run --output`)")
+    p.add_argument("-o", "--output", "--out", dest="output", default=None, metavar="DIR",
+                   help="the report folder to write (default: RUNS/report)")
+    p.add_argument("--runs", default=None, metavar="DIR", help=RUNS_HELP)
     p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
                    "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
     p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
@@ -420,7 +487,8 @@ def _add_compare(sub) -> None:
                        "on seed ensembles (agree / differ / undecided)")
     p.add_argument("reference", help="campaign file (TOML) of the reference settings")
     p.add_argument("variant", help="campaign file (TOML) that changes one setting")
-    p.add_argument("--out", default=None, help="also write the table to this CSV file")
+    p.add_argument("-o", "--output", "--out", dest="output", default=None, metavar="CSV",
+                   help="also write the table to this CSV file")
     p.add_argument("--json", action="store_true", help="print JSON rows")
     p.set_defaults(func=_cmd_compare)
 
@@ -432,8 +500,11 @@ def _cmd_compare(args) -> int:
     if table.empty:
         raise InputError("no physical case finished in both campaigns", where=f"{args.reference}, {args.variant}",
                          fix="labels must match apart from the seed: vary only what the label does not name")
-    if args.out:
-        table.to_csv(args.out, index=False)
+    if args.output:
+        table.to_csv(_output_path(args.output), index=False)
+    if not args.json:
+        for path in (args.reference, args.variant):
+            print(f"read the runs of {path} in {_runs_folder(path)}")
     if args.json:
         _print_json(table.to_dict(orient="records"))
         return 0
@@ -449,6 +520,13 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _runs_folder(campaign_path: str, runs: str | None = None):
+    """The runs folder a campaign file names (schema.campaign_output: no case is built)."""
+    from interphase.campaign.schema import campaign_output
+
+    return campaign_output(campaign_path, runs)[0]
+
+
 def _cmd_report(args) -> int:
     from interphase.report.build import build_report
 
@@ -457,17 +535,20 @@ def _cmd_report(args) -> int:
     if args.animate:
         from interphase.report.build import build_animations
 
-        paths = build_animations(args.campaign, args.animate, out=args.out, output=args.output)
+        paths = build_animations(args.campaign, args.animate, out=args.output, output=args.runs)
         if args.json:
             _print_json({"files": [str(p) for p in paths], "warnings": []})
         else:
             for p in paths:
                 print(f"wrote {p}")
         return 0
-    res = build_report(args.campaign, out=args.out, lab=args.lab, n_boot=args.bootstrap, output=args.output)
+    res = build_report(args.campaign, out=args.output, lab=args.lab, n_boot=args.bootstrap, output=args.runs)
+    runs = _runs_folder(args.campaign, args.runs)
     if args.json:
-        _print_json({"folder": str(res.folder), "files": [str(f) for f in res.files], "warnings": res.warnings})
+        _print_json({"folder": str(res.folder), "runs": str(runs), "files": [str(f) for f in res.files],
+                     "warnings": res.warnings})
         return 0
+    print(f"read the runs in {runs}")
     for w in res.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(f"wrote {len(res.files)} files to {res.folder}; open {res.folder / 'index.html'}")

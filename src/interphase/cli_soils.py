@@ -14,7 +14,7 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--normal-stress", type=float, action="append", required=True, metavar="PA",
                    help="normal stress [Pa] (repeatable)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
-    p.add_argument("--output", default=None, help="runs folder (default: runs/element/<card name>)")
+    p.add_argument("--runs", default=None, metavar="DIR", help="runs folder (default: runs/element/<card name>)")
     p.add_argument("--executor", choices=("local", "slurm"), default=None)
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -25,8 +25,9 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("target", help="calibration target (TOML: soil, laboratory values with their source, free "
                    "parameters with ranges)")
     p.add_argument("--quick", action="store_true", help="the smallest budget (tests, a first look)")
-    p.add_argument("--card", default=None, help="the card to write (default: soils/<target name>.toml)")
-    p.add_argument("--output", default=None, help="runs folder (default: runs/calibrate/<target name>)")
+    p.add_argument("-o", "--output", default=None, metavar="CARD",
+                   help="the soil card to write (default: soils/<target name>.toml)")
+    p.add_argument("--runs", default=None, metavar="DIR", help="runs folder (default: runs/calibrate/<target name>)")
     p.add_argument("--executor", choices=("local", "slurm"), default=None)
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -50,7 +51,7 @@ def _cmd_element(args, print_json) -> int:
         if not s > 0:
             raise InputError(f"must be > 0 Pa, got {s!r}", where="--normal-stress", fix="e.g. --normal-stress 100e3")
     card = load_card(args.card)
-    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=args.output,
+    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=args.runs,
                           executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
     if args.json:
         rows = [r.to_dict() for r in results]
@@ -71,7 +72,7 @@ def _cmd_element(args, print_json) -> int:
 def _cmd_calibrate(args, print_json) -> int:
     from interphase.campaign.calibrate import calibrate
 
-    result = calibrate(args.target, quick=args.quick, card_path=args.card, output=args.output,
+    result = calibrate(args.target, quick=args.quick, card_path=args.output, output=args.runs,
                        executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
     if args.json:
         print_json(result)

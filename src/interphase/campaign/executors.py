@@ -178,11 +178,30 @@ class LocalExecutor:
         self.jobs = jobs if jobs and jobs > 0 else (os.cpu_count() or 1)
 
     def run(self, tasks: list[Task], on_event: OnEvent, grace: float = 30.0) -> None:
-        if not tasks:
-            return
+        """Run `tasks` in a pool of `jobs` workers. A worker that dies (SIGKILL, the out-of-memory
+        killer) breaks a ProcessPoolExecutor for good: its case is recorded (worker_died, rerun by the
+        next `campaign run`), the cases the broken pool stopped or never started go to a new pool,
+        and the run goes on. Each new pool follows a death that ended at least one case, or at most
+        `len(tasks)` times (a worker that dies idle ends none)."""
+        remaining = list(tasks)
+        for generation in range(len(tasks) + 1):
+            if not remaining:
+                return
+            if generation:
+                on_event("note", "", {"message": f"a worker process died; a new pool of workers runs the "
+                                                  f"{len(remaining)} case(s) it stopped or had not started"})
+            remaining = self._run_pool(remaining, on_event, grace)
+        for t in remaining:    # workers kept dying without a case: record the rest as not run
+            on_event("finished", t.case_id, {"case_id": t.case_id, "status": "pending", "skipped": True})
+
+    def _run_pool(self, tasks: list[Task], on_event: OnEvent, grace: float) -> list[Task]:
+        """One pool over `tasks`; returns the tasks to run again in a new pool (its pool broke)."""
+        from concurrent.futures.process import BrokenProcessPool
+
         ctx = mp.get_context("spawn")   # no fork of a process that runs a display thread
         events = ctx.Queue()
         workers: dict[str, int] = {}
+        again: list[Task] = []
         with ProcessPoolExecutor(max_workers=min(self.jobs, len(tasks)), mp_context=ctx,
                                  initializer=_worker_init, initargs=(events, os.getpid())) as pool:
             futures = {pool.submit(_local_task, t.case, t.engine, str(t.folder), t.meta): t for t in tasks}
@@ -205,6 +224,12 @@ class LocalExecutor:
                     raise            # the campaign's own interruption, not this case's failure
                 except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
                     res = lost_result(t, exc, workers.get(t.case_id))
+                    if isinstance(exc, BrokenProcessPool) and res.get("cause") != "worker_died" and \
+                            res.get("status") in ("pending", "interrupted"):
+                        # stopped by the broken pool, not by its own fault: a new pool runs it
+                        workers.pop(t.case_id, None)
+                        again.append(t)
+                        return
                 workers.pop(t.case_id, None)
                 on_event("finished", t.case_id, res)
 
@@ -249,6 +274,7 @@ class LocalExecutor:
                                                                      "status": "pending", "skipped": True})
                 pool.shutdown(wait=False, cancel_futures=True)
                 raise
+        return again
 
 
 # ---- slurm ----------------------------------------------------------------------------------

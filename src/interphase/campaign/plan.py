@@ -96,12 +96,9 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
 
     `engines` overrides the campaign's engine list (`campaign run --engine`). `identity(name)` gives
     the engine's recipe id; benchmarks may pass a constant one."""
-    names = tuple(engines) if engines else campaign.engines
-    from interphase.campaign.schema import ENGINES
-
-    for n in names:
-        if n not in ENGINES:
-            raise InputError(f"unknown engine {n!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
+    if campaign.lazy:
+        return list(iter_plan(campaign, engines, identity))
+    names = _engine_names(campaign, engines)
     out: list[PlannedCase] = []
     order = sorted(range(len(campaign.cases)), key=lambda i: (campaign.cases[i].role != "box", i))
     src = campaign.specimen_from
@@ -124,6 +121,44 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
                 recipe_id=rid, params=params))
     return out
+
+
+def _engine_names(campaign: Campaign, engines) -> tuple[str, ...]:
+    from interphase.campaign.schema import ENGINES
+
+    names = tuple(engines) if engines else campaign.engines
+    for n in names:
+        if n not in ENGINES:
+            raise InputError(f"unknown engine {n!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
+    return names
+
+
+def iter_plan(campaign: Campaign, engines=None, identity=engine_identity):
+    """The planned cases one at a time, never all in memory: what `campaign run --dry-run` counts
+    and samples. A campaign of at most schema.EAGER_MAX cases gives plan()'s list in plan()'s
+    order; a larger (lazy) one is built as it is read, each box test just before the first
+    interface case that needs it (the same ids as plan() would give; 10⁶ cases: BENCHMARKS.md)."""
+    if not campaign.lazy:
+        yield from plan(campaign, engines, identity)
+        return
+    from interphase.campaign.schema import iter_cases
+
+    names = _engine_names(campaign, engines)
+    if campaign.specimen_from:
+        raise InputError(f"a campaign of {campaign.size} cases with specimen_from is not planned lazily",
+                         where=f"{campaign.path}: campaign.specimen_from",
+                         fix="split the sweep into files of at most 20000 cases")
+    rids = {n: identity(n) for n in names}
+    index = 0
+    for c, box, new in iter_cases(campaign):
+        for name in names:
+            rid = rids[name]
+            for b in new + ([c] if c is not None else []):
+                pair = case_id(box.case, name, rid) if b is c and box is not None else None
+                yield PlannedCase(case_id=case_id(b.case, name, rid), engine=name, case=b.case, group=b.group,
+                                  role=b.role, label=_label(b.case), values=b.values, pair_id=pair, index=index,
+                                  recipe_id=rid, params=flat_params(b.case))
+                index += 1
 
 
 def _label(case: Case) -> str:

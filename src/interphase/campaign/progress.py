@@ -90,6 +90,9 @@ class Progress:
     def event(self, kind: str, case_id: str, info: dict) -> None:
         p = self.items.get(case_id)
         label = p.label if p else ""
+        if kind == "note":
+            self._line(f"  note   {info.get('message', '')}")
+            return
         if kind == "started":
             self.state[case_id] = "running"
             self.t0[case_id] = time.monotonic()

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from interphase.campaign import store as st
 from interphase.campaign.executors import LocalExecutor, SlurmExecutor, Task
-from interphase.campaign.plan import PlannedCase, plan, rate_warnings, time_limit_minutes
+from interphase.campaign.plan import PlannedCase, plan, time_limit_minutes
 from interphase.campaign.progress import Progress
 from interphase.campaign.runner import Interrupted
 from interphase.campaign.schema import EXECUTORS, Campaign, load_campaign
@@ -150,11 +150,23 @@ def _slots(campaign: Campaign, executor: str, jobs: int | None) -> int:
     return campaign.execution.max_concurrent
 
 
+#: above this many cases a run, or a dry run's full listing and decks, asks for `yes` (--yes)
+LARGE = 10_000
+#: planned cases a dry run shows before its tallies
+SAMPLE = 10
+
+
 def run_campaign(path, *, engine: str | None = None, executor: str | None = None, jobs: int | None = None,
                  rerun_failed: bool = False, rerun_stale: bool = False, dry_run: bool = False, output=None,
-                 restore=None, stream=None, live: bool | None = None) -> RunReport:
+                 restore=None, stream=None, live: bool | None = None, yes: bool = False,
+                 render: bool = False, list_all: bool = False) -> RunReport:
     """Run what is not finished. `restore`: a summaries table whose rows of planned cases become
-    finished folders first (interphase.campaign.restore), so that only the rest runs."""
+    finished folders first (interphase.campaign.restore), so that only the rest runs.
+
+    The count comes first, before anything is planned: a campaign of more than LARGE cases is
+    run (or fully listed by a dry run) only with `yes`. A dry run prints the count, a sample of
+    SAMPLE cases and the tallies; it writes decks only with `render`, lists every case only with
+    `list_all`."""
     stream = stream or sys.stdout
     campaign = load_campaign(path, output=output)
     executor = executor or campaign.execution.executor
@@ -162,13 +174,28 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         raise InputError(f"unknown executor {executor!r}", where="--executor", fix=f"use one of {', '.join(EXECUTORS)}")
     if jobs is not None and jobs < 0:
         raise InputError(f"must be ≥ 0 (0 = one per core), got {jobs}", where="--jobs")
+    n_engines = 1 if engine else len(campaign.engines)
+    count = campaign.size * n_engines
+    print(f"campaign {campaign.name}: {campaign.size} case(s) in the sweeps × {n_engines} engine(s) = {count}, "
+          f"plus their box tests; runs folder {campaign.output} ({campaign.output_from})", file=stream, flush=True)
+    for w in campaign.warnings():
+        print(f"warning: {w}", file=stream, flush=True)
+    large = count > LARGE and not yes
+    if large and not (dry_run and not (render or list_all)):
+        raise InputError(f"{count} cases is more than {LARGE}", where=str(path),
+                         fix="add --yes to plan them all (`--dry-run` alone shows the count and a sample)")
+    if dry_run and (campaign.lazy or large):
+        from interphase.campaign.plan import iter_plan
+
+        return _dry_run(campaign, iter_plan(campaign, [engine] if engine else None), executor, stream, report=RunReport(
+            campaign.name, campaign.output), rerun_failed=rerun_failed, rerun_stale=rerun_stale, builds={},
+            restore=restore, render=render, list_all=list_all, stop_after_sample=large)
     planned = plan(campaign, [engine] if engine else None)
     report = RunReport(campaign.name, campaign.output, planned=len(planned))
-    for w in rate_warnings([p.case for p in planned]):
-        print(f"warning: {w}", file=stream, flush=True)
     builds = engine_builds(p.engine for p in planned)
     if dry_run:
-        return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds, restore)
+        return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds, restore,
+                        render=render, list_all=list_all)
 
     store = st.CampaignStore(campaign.output, create=True)
     with store, store.lock("campaign run"):
@@ -313,13 +340,16 @@ class DiskFull(Interrupted):
     """A case found the disk full: the run stops (the next case would too)."""
 
 
-def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stream, report: RunReport,
+def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunReport,
              rerun_failed: bool = False, rerun_stale: bool = False, builds: dict | None = None,
-             restore=None) -> RunReport:
-    """List what would run and render every deck under <output>/.dry-run/<case_id>/ (no engine runs).
-    Finished folders are verified (through the index, as `campaign status` does): a corrupt one is
-    listed as kept, or as rerun with `rerun_failed`; a case without a folder whose id is a row of
-    `restore` (a summaries table) as restored."""
+             restore=None, *, render: bool = False, list_all: bool = False,
+             stop_after_sample: bool = False) -> RunReport:
+    """What a run would do, read one planned case at a time (`planned`: a list or iter_plan's
+    generator): SAMPLE cases (every one with `list_all`), then the tallies per action. Decks are
+    rendered under <output>/.dry-run/<case_id>/ only with `render`. Finished folders are verified
+    (through the index, as `campaign status` does): a corrupt one is listed as kept, or as rerun with
+    `rerun_failed`; a case without a folder whose id is a row of `restore` (a summaries table) as
+    restored. `stop_after_sample`: a campaign over LARGE without --yes: the sample, then stop."""
     from interphase.engines.base import get_engine
 
     record = set()
@@ -332,11 +362,14 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
     engines = {}
     indexed: dict = {}
     stale: dict = {}
-    if campaign.output.is_dir():
+    if campaign.output.is_dir() and isinstance(planned, list):
         with st.CampaignStore(campaign.output) as store:
             stale = find_stale(planned, store.status(), builds or {})
             indexed = store.statuses()
-    print(f"campaign {campaign.name} (dry run, {executor}): {len(planned)} cases → {campaign.output}", file=stream)
+    total = f"{len(planned)} cases" if isinstance(planned, list) else "cases read one at a time"
+    print(f"campaign {campaign.name} (dry run, {executor}): {total} → {campaign.output}", file=stream, flush=True)
+    tallies: dict[str, int] = {}
+    n = 0
     for p in planned:
         folder = campaign.output / p.case_id
         state = st.folder_status(folder) if folder.exists() else "pending"
@@ -353,17 +386,29 @@ def _dry_run(campaign: Campaign, planned: list[PlannedCase], executor: str, stre
             action = f"rerun ({state})" if rerun_failed else f"skip ({state})"
         else:
             action = "run"
-        eng = engines.setdefault(p.engine, get_engine(p.engine))
-        limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)
-        if action == "run" and _start_status(p.case) != "done":
-            # its input is the specimen of a run not made yet: rendered when that run has finished
-            shown = f"starts from {p.case.start.label()}"
-        else:
-            shown = f"{len(eng.write_input(p.case, root / p.case_id))} files"
-        print(f"  {action:<13} {p.case_id}  {p.engine:<8} {p.group:<8} {p.label}  "
-              f"[{shown}; slurm limit {limit} min]", file=stream)
-        report.statuses[p.case_id] = state
-    print(f"decks rendered in {root}", file=stream, flush=True)
+        tallies[action] = tallies.get(action, 0) + 1
+        n += 1
+        if render and action == "run" and _start_status(p.case) == "done":
+            eng = engines.setdefault(p.engine, get_engine(p.engine))
+            eng.write_input(p.case, root / p.case_id)
+        if n <= SAMPLE or list_all:
+            limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)
+            shown = f"starts from {p.case.start.label()}; " if action == "run" and _start_status(p.case) != "done" \
+                else ""
+            print(f"  {action:<13} {p.case_id}  {p.engine:<8} {p.group:<8} {p.label}  "
+                  f"[{shown}slurm limit {limit} min]", file=stream, flush=n == SAMPLE)
+        if len(report.statuses) < LARGE:        # the report keeps a bounded record, not 10⁶ rows
+            report.statuses[p.case_id] = state
+        if stop_after_sample and n >= SAMPLE:
+            print(f"  … (a sample of {SAMPLE}; more than {LARGE} cases: `--dry-run --yes` counts what would run, "
+                  "`--render` writes their decks, `--list` lists every case)", file=stream, flush=True)
+            return report
+    if not list_all and n > SAMPLE:
+        print(f"  … {n - SAMPLE} more (`--list` lists every case)", file=stream)
+    report.planned = n
+    print(f"{n} cases: " + ", ".join(f"{v} {k}" for k, v in sorted(tallies.items())), file=stream)
+    print(f"decks rendered in {root}" if render else "no decks written (`--render` writes the decks of the cases "
+          f"that would run, under {root})", file=stream, flush=True)
     return report
 
 

@@ -264,15 +264,16 @@ def run_single(case: Case, engine_name: str, folder: str | os.PathLike) -> dict:
     """One case outside a campaign (`campaign run-case`): `run_case` in `folder`, whose result dict
     also carries the summary row (read back from summary.json when the folder had already finished).
 
-    A folder that exists, is not empty and holds no case.json is refused: the runner clears an
-    unfinished case folder before it starts, and a user's folder is not one."""
-    from interphase.errors import InputError
+    The folder is checked first (campaign.guard.check_run_folder): a folder of another case, or a
+    non-empty folder that is no case folder, is refused (InputError); this same case's finished
+    folder is read back, not rerun."""
+    from interphase.campaign.guard import check_run_folder
+    from interphase.engines.base import get_engine
 
     folder = Path(folder)
-    if folder.is_dir() and any(folder.iterdir()) and not (folder / st.CASE_JSON).exists():
-        raise InputError(f"{str(folder)!r} is not empty and is not a case folder", where="-o",
-                         fix="give a new or empty folder (an unfinished case folder is cleared before the run)")
-    result = run_case(case, engine_name, folder)
+    engine = get_engine(engine_name)
+    check_run_folder(folder, case, engine_name, engine.recipe_id())
+    result = run_case(case, engine_name, folder, {"label": case.label()}, engine=engine)
     if result["status"] == "done" and "summary" not in result:
         result["summary"] = st.read_json(folder / st.SUMMARY_JSON)["row"]
     return result

@@ -6,7 +6,8 @@ File layout (SI units; [case] keys are the field names of `interphase.case.Case`
     name = "group1"                    # letters, digits, - and _ (folder name)
     description = "..."
     engines = ["liggghts"]             # or engine = "liggghts"; `campaign run --engine` overrides
-    output = "runs/group1"             # optional; relative to the campaign file. Default: ./runs/<name>
+    output = "../runs/group1"          # the runs folder, relative to the campaign file; default: runs/<name>
+                                       # beside the campaign file; `--runs DIR` on any command overrides it
     specimen_from = "liggghts"         # optional, with two engines: the other engine shears the specimen
                                        # this one consolidated for the same case (its grains and platen
                                        # at the start of the shear); its runs come first
@@ -117,6 +118,19 @@ class Campaign:
     execution: Execution = field(default_factory=Execution)
     description: str = ""
     specimen_from: str | None = None    # the engine whose consolidated specimens the others shear
+    stated: tuple[str, ...] = ()        # Case fields the file states ([case], groups, sweeps, zips)
+    output_from: str = ""               # where `output` came from, said with it (the runs folder)
+    size: int = 0                       # cases of the sweeps' products (before box tests), counted
+    lazy: bool = False                  # more than EAGER_MAX: `cases` is empty, see iter_cases()
+    _spec: object = field(default=None, compare=False, repr=False)
+
+    def warnings(self) -> list[str]:
+        """Implausible values and unstated converged settings (interphase.campaign.checks), one line
+        each: what `campaign run`, its dry run and `campaign status` print before anything else."""
+        from interphase.campaign.checks import default_notes, input_warnings
+
+        cases = list(self._spec.checked) if self._spec is not None else [c.case for c in self.cases]
+        return input_warnings(cases) + default_notes(self.stated)
 
     @property
     def pairs(self) -> list[tuple[int, int]]:
@@ -215,8 +229,8 @@ def _type_name(v) -> str:
 def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None = None) -> Campaign:
     """Read and validate a campaign file; every case is built (and validated) here, nothing runs.
 
-    `output` overrides the output folder (else [campaign].output relative to the file, else
-    ./runs/<name> relative to the current directory)."""
+    `output` overrides the runs folder (else [campaign].output relative to the file, else runs/<name>
+    beside the file; never the current directory). `Campaign.output_from` says which."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -249,15 +263,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     engines = _engines(ctx, meta)
     specimen_from = _specimen_from(ctx, meta, engines)
     base_dir = path.parent.resolve()
-    if output is not None:
-        out = Path(output)
-    elif "output" in meta:
-        if not isinstance(meta["output"], str) or not meta["output"]:
-            raise ctx.error(("campaign", "output"), "must be a folder path (string)")
-        out = Path(meta["output"])
-        out = out if out.is_absolute() else base_dir / out
-    else:
-        out = Path("runs") / name
+    out, output_from = _resolve_output(ctx, meta, name, path, output)
     execution = _execution(ctx, data.get("execution", {}))
 
     groups_raw = data.get("group")
@@ -289,9 +295,8 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
 
     _check_case_keys(ctx, top_case, ("case",))
-    cases: list[CampaignCase] = []
     groups: list[Group] = []
-    seen: dict[str, tuple] = {}
+    gens: list[tuple] = []
     for gname, gdesc, gcase, sweep, zips, gpath in groups_spec:
         _check_case_keys(ctx, gcase, gpath + ("case",))
         base = _merge(top_case, gcase)
@@ -300,6 +305,51 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             where = gpath + ("case", "soil") if "soil" in gcase else ("case", "soil")
             base = _with_soil(ctx, base, base_dir, where, variables)
         groups.append(Group(gname, tuple(variables), gdesc if isinstance(gdesc, str) else ""))
+        gens.append((gname, base, factors, gpath))
+    size = sum(math.prod(len(f) for f in factors) for _, _, factors, _ in gens)
+    pairs = data.get("pairs", {})
+    stated = set(top_case) | {k for g in groups_spec for k in g[2]} | {v.split(".")[0] for g in groups for v in g.variables}
+    lazy = size > EAGER_MAX
+    if lazy:
+        # every swept value is built once, with the other factors at their first value: a bad value
+        # is refused now, at load, without building the product (combinations are built as planned)
+        checked = [c for c in _value_cases(ctx, gens, base_dir)]
+        _pair_options(ctx, pairs, any(c.role == "interface" for c in checked))
+        cases: tuple = ()
+    else:
+        seen: dict[str, tuple] = {}
+        cases = tuple(_add_pairs(ctx, pairs, list(_iter_group_cases(ctx, gens, base_dir, seen)), seen))
+        checked = [c for c in cases]
+    return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines,
+                    groups=tuple(groups), cases=cases, size=size, lazy=lazy,
+                    output=Path(os.path.abspath(out)), output_from=output_from, execution=execution,
+                    description=description, specimen_from=specimen_from,
+                    _spec=_Spec(ctx, tuple(gens), base_dir, pairs, tuple(c.case for c in checked)))
+
+
+#: above this many cases (the product of the sweeps, before box tests) a campaign is planned lazily:
+#: `Campaign.cases` stays empty and `iter_cases()` / `campaign.plan.iter_plan` build cases one at a
+#: time (10⁶ cases: BENCHMARKS.md)
+EAGER_MAX = 20_000
+
+
+@dataclass(frozen=True)
+class _Spec:
+    """What a lazy campaign builds its cases from (the located file, its groups' factors)."""
+
+    ctx: object
+    gens: tuple
+    base_dir: Path
+    pairs: dict
+    checked: tuple          # the Cases built at load (all of them, or one per swept value when lazy)
+
+
+def _iter_group_cases(ctx: _Ctx, gens, base_dir: Path, seen: dict | set):
+    """Every case of the groups' products, in file order; refuses a duplicate (`seen`: canonical
+    JSON → (group, values) when a dict; a set of digests when lazy, to bound memory)."""
+    import hashlib
+
+    for gname, base, factors, gpath in gens:
         for combo in itertools.product(*factors) if factors else [()]:
             values: list[tuple[str, object, tuple]] = [kv for part in combo for kv in part]
             data_case = copy.deepcopy(base)
@@ -307,20 +357,103 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
                 _assign(ctx, data_case, key, value, gpath)
             case = _build_case(ctx, data_case, base_dir, values, gpath)
             key = canonical_json(case.canonical())
-            if key in seen:
-                prev_g, prev_vals = seen[key]
+            mark = key if isinstance(seen, dict) else hashlib.blake2b(key.encode(), digest_size=16).digest()
+            if mark in seen:
+                prev_g, prev_vals = seen[mark] if isinstance(seen, dict) else ("?", "an earlier case")
                 first = values[0][2] if values else gpath + ("case",)
                 shown = ", ".join(f"{k} = {v!r}" for k, v, _ in values) or "(no sweep)"
                 raise ctx.error(first, f"duplicate case: {shown} gives the same case as group {prev_g!r} "
                                 f"with {prev_vals or '(no sweep)'}",
                                 "remove repeated values from the sweep (case identity ignores 'name')")
-            seen[key] = (gname, ", ".join(f"{k} = {v!r}" for k, v, _ in values))
+            if isinstance(seen, dict):
+                seen[mark] = (gname, ", ".join(f"{k} = {v!r}" for k, v, _ in values))
+            else:
+                seen.add(mark)
             role = "interface" if case.test == "interface" else "box"
-            cases.append(CampaignCase(case, gname, role, tuple((k, _freeze(v)) for k, v, _ in values)))
-    cases = _add_pairs(ctx, data.get("pairs", {}), cases, seen)
-    return Campaign(name=name, path=path.resolve(), engines=engines, groups=tuple(groups), cases=tuple(cases),
-                    output=out.resolve() if not out.is_absolute() else out, execution=execution,
-                    description=description, specimen_from=specimen_from)
+            yield CampaignCase(case, gname, role, tuple((k, _freeze(v)) for k, v, _ in values))
+
+
+def _value_cases(ctx: _Ctx, gens, base_dir: Path):
+    """One case per swept value (the other factors at their first value): load-time checks of a
+    lazy campaign."""
+    for gname, base, factors, gpath in gens:
+        for i, factor in enumerate(factors):
+            for choice in factor:
+                combo = [f[0] for f in factors[:i]] + [choice] + [f[0] for f in factors[i + 1:]]
+                values = [kv for part in combo for kv in part]
+                data_case = copy.deepcopy(base)
+                for key, value, _ in values:
+                    _assign(ctx, data_case, key, value, gpath)
+                case = _build_case(ctx, data_case, base_dir, values, gpath)
+                yield CampaignCase(case, gname, "interface" if case.test == "interface" else "box")
+
+
+def iter_cases(campaign: "Campaign"):
+    """(CampaignCase, its paired box CampaignCase or None, the box tests first seen here) one
+    interface case at a time, in file order: a lazy campaign's cases without holding them all.
+    Box tests come before the first interface case that needs them, each soil's once (with its
+    [pairs] seeds after it)."""
+    spec = campaign._spec
+    want, overrides, seeds = _pair_options(spec.ctx, spec.pairs, True)
+    boxes: dict[str, CampaignCase] = {}
+    for c in _iter_group_cases(spec.ctx, spec.gens, spec.base_dir, set()):
+        if c.role == "box":
+            key = canonical_json(c.case.canonical())
+            new = [] if key in boxes else [c]
+            boxes.setdefault(key, c)
+            yield None, None, new
+            continue
+        if not want:
+            yield c, None, []
+            continue
+        box = _box_of(spec.ctx, c, overrides)
+        key = canonical_json(box.case.canonical())
+        new = []
+        if key not in boxes:
+            boxes[key] = box
+            new.append(box)
+            for seed in seeds:
+                extra = box.case.replace(seed=seed)
+                k2 = canonical_json(extra.canonical())
+                if k2 not in boxes:
+                    boxes[k2] = CampaignCase(extra, "box", "box", box.values)
+                    new.append(boxes[k2])
+        yield c, boxes[key], new
+
+
+def _resolve_output(ctx: _Ctx, meta: dict, name: str, path: Path, output) -> tuple[Path, str]:
+    """(runs folder, where it came from): `output` (--runs), else [campaign] output relative to the
+    campaign file, else runs/<name> beside the file. Never the current directory."""
+    base_dir = path.parent.resolve()
+    if output is not None:
+        out = Path(output)
+        output_from = "given on the command line (--runs)"
+    elif "output" in meta:
+        if not isinstance(meta["output"], str) or not meta["output"]:
+            raise ctx.error(("campaign", "output"), "must be a folder path (string)")
+        out = Path(meta["output"])
+        out = out if out.is_absolute() else base_dir / out
+        line = ctx.loc.line(("campaign", "output"))
+        output_from = f"[campaign] output of {path}" + (f":{line}" if line else "")
+    else:
+        # beside the campaign file, wherever the command is run from (it used to be the current
+        # folder's ./runs/<name>: `status` from elsewhere found nothing and said "pending")
+        out = base_dir / "runs" / name
+        output_from = f"the default runs/{name} beside {path.name} ([campaign] output or --runs to change)"
+    return Path(os.path.abspath(out)), output_from
+
+
+def campaign_output(path, output=None) -> tuple[Path, str]:
+    """(runs folder, where it came from) of a campaign file, from its [campaign] table alone (no
+    case is built): what a command that reads runs says it read."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+        meta = tomllib.loads(text).get("campaign", {})
+    except (OSError, tomllib.TOMLDecodeError):
+        raise InputError("cannot read the campaign file", where=str(path)) from None
+    name = meta.get("name", path.stem) if isinstance(meta, dict) else path.stem
+    return _resolve_output(_Ctx(path, text), meta if isinstance(meta, dict) else {}, str(name), path, output)
 
 
 def _as_list(z) -> list:
@@ -521,8 +654,12 @@ _UNKNOWN_IN_MSG = re.compile(r"unknown (?:key|parameter) '([^']+)'")
 
 def _build_case(ctx: _Ctx, data: dict, base_dir: Path, values, gpath: tuple) -> Case:
     """case_from_dict, with its message re-anchored at the TOML line that supplied the bad field."""
+    from interphase.campaign.checks import input_errors
+
     try:
-        return case_from_dict(data, where="case", base_dir=base_dir)
+        case = case_from_dict(data, where="case", base_dir=base_dir)
+        input_errors([case], where="case")
+        return case
     except InputError as exc:
         msg = str(exc)
         m = _FIELD_IN_MSG.search(msg)
@@ -556,23 +693,7 @@ def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) ->
     The box case keeps the soil, stiffness, stress, speed and seed of the interface case; its walls
     (both halves) take the particle–boundary friction friction_pw, so friction_ps := friction_pw
     (the study's box has no rough surface). [pairs].case overrides box-only settings."""
-    _check_keys(ctx, pairs, PAIR_KEYS, ("pairs",))
-    want = pairs.get("box", any(c.role == "interface" for c in cases))
-    if not isinstance(want, bool):
-        raise ctx.error(("pairs", "box"), f"must be true or false, got {want!r}")
-    overrides = pairs.get("case", {})
-    if not isinstance(overrides, dict):
-        raise ctx.error(("pairs", "case"), "must be a table of Case fields")
-    _check_case_keys(ctx, overrides, ("pairs", "case"))
-    for bad in ("test", "profile", "friction_ps"):
-        if bad in overrides:
-            raise ctx.error(("pairs", "case", bad), f"{bad} of a paired box test is set by the campaign",
-                            "remove it (box tests have no surface)")
-    seeds = pairs.get("seeds", [])
-    if (not isinstance(seeds, list) or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1
-                                                for x in seeds) or len(set(seeds)) != len(seeds)):
-        raise ctx.error(("pairs", "seeds"), f"must be a list of distinct packing seeds (integers ≥ 1), got {seeds!r}",
-                        "e.g. seeds = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]")
+    want, overrides, seeds = _pair_options(ctx, pairs, any(c.role == "interface" for c in cases))
     if not want:
         return cases
     out = list(cases)
@@ -583,13 +704,7 @@ def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) ->
     for i, c in enumerate(cases):
         if c.role != "interface":
             continue
-        data = {k: v for k, v in c.case.canonical().items() if k not in ("profile", "test", "friction_ps")}
-        data.update(test="box", friction_ps=c.case.friction_pw, **overrides)
-        data = {k: v for k, v in data.items() if v is not None}
-        try:
-            box = case_from_dict(data, where="pairs.case")
-        except InputError as exc:
-            raise ctx.error(("pairs", "case"), str(exc).split(": ", 1)[-1]) from None
+        box = _box_of(ctx, c, overrides).case
         key = canonical_json(box.canonical())
         if key not in index:
             index[key] = len(out)
@@ -606,3 +721,38 @@ def _add_pairs(ctx: _Ctx, pairs: dict, cases: list[CampaignCase], seen: dict) ->
                 index[key] = len(out)
                 out.append(CampaignCase(extra, "box", "box", b.values))
     return out
+
+
+def _pair_options(ctx: _Ctx, pairs: dict, has_interface: bool) -> tuple[bool, dict, list]:
+    """([pairs] box, case overrides, seeds), checked."""
+    _check_keys(ctx, pairs, PAIR_KEYS, ("pairs",))
+    want = pairs.get("box", has_interface)
+    if not isinstance(want, bool):
+        raise ctx.error(("pairs", "box"), f"must be true or false, got {want!r}")
+    overrides = pairs.get("case", {})
+    if not isinstance(overrides, dict):
+        raise ctx.error(("pairs", "case"), "must be a table of Case fields")
+    _check_case_keys(ctx, overrides, ("pairs", "case"))
+    for bad in ("test", "profile", "friction_ps"):
+        if bad in overrides:
+            raise ctx.error(("pairs", "case", bad), f"{bad} of a paired box test is set by the campaign",
+                            "remove it (box tests have no surface)")
+    seeds = pairs.get("seeds", [])
+    if (not isinstance(seeds, list) or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1
+                                                for x in seeds) or len(set(seeds)) != len(seeds)):
+        raise ctx.error(("pairs", "seeds"), f"must be a list of distinct packing seeds (integers ≥ 1), got {seeds!r}",
+                        "e.g. seeds = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]")
+    return want, overrides, seeds
+
+
+def _box_of(ctx: _Ctx, c: CampaignCase, overrides: dict) -> CampaignCase:
+    """The paired box test of interface case `c`: its soil (every field but the surface), walls at
+    friction_pw, [pairs].case overrides."""
+    data = {k: v for k, v in c.case.canonical().items() if k not in ("profile", "test", "friction_ps")}
+    data.update(test="box", friction_ps=c.case.friction_pw, **overrides)
+    data = {k: v for k, v in data.items() if v is not None}
+    try:
+        box = case_from_dict(data, where="pairs.case")
+    except InputError as exc:
+        raise ctx.error(("pairs", "case"), str(exc).split(": ", 1)[-1]) from None
+    return CampaignCase(box, "box", "box", (("pair_of", c.group),))

@@ -80,8 +80,9 @@ class ProfileSpec:
         if self.kind == "random":
             if names["au"] <= 0 or names["ar"] <= 0 or names["rtmax"] <= 0:
                 raise InputError("need au > 0, ar > 0, rtmax > 0 (D50 units)", where=self.where)
-            if int(names["seed"]) != names["seed"]:
-                raise InputError("seed must be an integer", where=f"{self.where}.seed")
+            if int(names["seed"]) != names["seed"] or names["seed"] < 0:
+                raise InputError(f"seed must be an integer ≥ 0, got {names['seed']!r}", where=f"{self.where}.seed",
+                                 fix="use 1, 2, 3, …")
         if self.kind == "selfaffine":
             if not 0 < names["hurst"] < 1:
                 raise InputError("need 0 < hurst < 1", where=f"{self.where}.hurst")
@@ -92,8 +93,9 @@ class ProfileSpec:
                                  fix="e.g. short_cutoff = 0.1, long_cutoff = 10, length = 60")
             if names["length"] / names["short_cutoff"] > 1e5:
                 raise InputError("length/short_cutoff above 1e5 grid points", where=self.where)
-            if int(names["seed"]) != names["seed"]:
-                raise InputError("seed must be an integer", where=f"{self.where}.seed")
+            if int(names["seed"]) != names["seed"] or names["seed"] < 0:
+                raise InputError(f"seed must be an integer ≥ 0, got {names['seed']!r}", where=f"{self.where}.seed",
+                                 fix="use 1, 2, 3, …")
         if self.kind != "file" and (self.axis, self.line, self.direction) != (None, None, "+"):
             raise InputError("axis, line and direction are for file profiles", where=self.where)
         if self.kind == "file":

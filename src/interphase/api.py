@@ -1,0 +1,139 @@
+"""The Python API: what the `campaign` command does, from a script or a notebook.
+
+    import interphase as ip
+    c = ip.load_campaign("campaigns/quick.toml")          # validated, nothing runs
+    cases = ip.plan(c)                                     # [PlannedCase]: case_id, label, case, ...
+    ip.run(c)                                              # RunReport; resumable, as `campaign run`
+    ip.status(c)                                           # DataFrame, one row per planned case
+    df = ip.summaries(c)                                   # DataFrame, one row per finished run
+    ens = ip.ensembles(c)                                  # DataFrame, one row per physical case
+    p = ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # dict: θa → θr → E → tan δ
+
+Every function takes a campaign file's path or a loaded `Campaign`, and `runs=` where the runs
+folder is not the one the file names (`--runs` of the command). Units are SI in every table
+(m, Pa, m/s), angles in degrees as the column names say (`*_deg`; ψ from vertical, docs/methods.md);
+bad input raises `interphase.errors.InputError` naming the file, the field and the fix.
+Nothing heavy is imported until a function is called.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+PathLike = str | os.PathLike
+
+
+def load_campaign(path: PathLike, runs: PathLike | None = None):
+    """Read and check a campaign file (TOML): a `Campaign` with `.name`, `.cases` (every case
+    built, or none when `.lazy`: more than 20000, see `plan`), `.size` (the count), `.output` (the
+    runs folder: `runs`, else the file's [campaign] output relative to the file, else runs/NAME
+    beside it), `.output_from` (which of those) and `.warnings()` (implausible values, unstated
+    settings). Nothing runs."""
+    from interphase.campaign.schema import load_campaign as _load
+
+    return _load(path, output=runs)
+
+
+def _campaign(campaign, runs=None):
+    from interphase.campaign.schema import Campaign
+
+    if isinstance(campaign, Campaign):
+        if runs is not None and Path(runs).resolve() != campaign.output:
+            return load_campaign(campaign.path, runs)
+        return campaign
+    return load_campaign(campaign, runs)
+
+
+def plan(campaign, engine: str | None = None, *, lazy: bool = False):
+    """The planned runs of a campaign: `PlannedCase(case_id, engine, case, group, role, label,
+    pair_id, params)`, box tests first. The case id hashes the case's inputs, the engine and its
+    recipe: the same on every machine. `lazy=True` gives a generator (any size, built one case at a
+    time); else a list. `engine` replaces the file's engines."""
+    from interphase.campaign.plan import iter_plan
+    from interphase.campaign.plan import plan as _plan
+
+    c = _campaign(campaign)
+    engines = [engine] if engine else None
+    return iter_plan(c, engines) if lazy else _plan(c, engines)
+
+
+def run(campaign, *, runs: PathLike | None = None, engine: str | None = None, executor: str | None = None,
+        jobs: int | None = None, rerun_failed: bool = False, dry_run: bool = False, yes: bool = False,
+        quiet: bool = False):
+    """Run what is not finished (as `campaign run`): returns a `RunReport` (`.statuses` {case id:
+    status}, `.exit_code` 0 when every case finished). Progress goes to stdout (`quiet`: nowhere).
+    More than 10000 cases need `yes=True`."""
+    import io
+
+    from interphase.campaign.run import run_campaign
+
+    c = _campaign(campaign, runs)
+    return run_campaign(c.path, output=runs if runs is not None else c.output, engine=engine, executor=executor,
+                        jobs=jobs, rerun_failed=rerun_failed, dry_run=dry_run, yes=yes,
+                        stream=io.StringIO() if quiet else None, live=False)
+
+
+def status(campaign, *, runs: PathLike | None = None):
+    """One row per planned case (as `campaign status --json`): case_id, engine, group, label, role,
+    status (pending, done, failed, killed, interrupted, incomplete, corrupt, stale), cause, message,
+    elapsed [s], attempts. Raises InputError when the runs folder does not exist."""
+    from interphase.campaign.run import campaign_status
+    from interphase.errors import InputError
+
+    c = _campaign(campaign, runs)
+    if not c.output.is_dir():
+        raise InputError(f"the runs folder {c.output} does not exist ({c.output_from})", where=str(c.path),
+                         fix="run the campaign first, or give runs= where its runs are")
+    return campaign_status(c.path, output=c.output)[2]
+
+
+def summaries(campaign, *, runs: PathLike | None = None):
+    """One row per finished run the campaign file asks for, of one recipe per engine (as the
+    report's tables/summaries.csv): the case's parameters (SI) and its summary (peak_stress_ratio,
+    tan_delta-like ratios [-], theta_r_*_deg, shear_disp_at_peak [m], …), `pair_id` = its box
+    test. Raises InputError when nothing has run."""
+    from interphase.report.build import open_campaign
+
+    c = _campaign(campaign, runs)
+    _, store, rows = open_campaign(c.path, c.output)
+    store.close()
+    return rows
+
+
+def ensembles(campaign, *, runs: PathLike | None = None):
+    """One row per physical case (its seeds pooled): tan δ, tan φ and E at the peak and at the
+    critical state, each with its 95 % interval and the number of seeds (the report's ensembles
+    table; docs/methods.md). Raises InputError when nothing has run."""
+    from interphase.report.build import open_campaign
+    from interphase.report.ensembles import ensemble_tables
+
+    c = _campaign(campaign, runs)
+    _, store, rows = open_campaign(c.path, c.output)
+    try:
+        return ensemble_tables(rows, store)[0]
+    finally:
+        store.close()
+
+
+def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,
+            tan_phi: float | None = None, units: str | None = None) -> dict:
+    """The criterion chain for a surface profile (as `campaign predict --json`): θa → θr → E →
+    tan δ. `d50_mm` [mm], `friction` = tan φμ particle–surface [-]; `fit`: a campaign file, a
+    criterion.json or 'study' (default: the reproduction's fits shipped with the package);
+    `tan_phi` of your soil (default: the fits' simulated soil). Returns a dict: theta_a_deg,
+    theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes."""
+    import math
+
+    from interphase.analysis.criterion import predict_profile
+    from interphase.errors import InputError
+    from interphase.report.build import criterion_model
+    from interphase.surface.readers import load_profile
+
+    if not (isinstance(d50_mm, (int, float)) and math.isfinite(d50_mm) and d50_mm > 0):
+        raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm")
+    if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
+        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
+    model = criterion_model(friction, fit, tan_phi)
+    res = predict_profile(model, load_profile(str(profile), units, None), d50_mm * 1e-3, friction, None)
+    return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
