@@ -313,7 +313,8 @@ def _quiet(fn):
 def _clean(obj):
     if isinstance(obj, dict):
         return {k: _clean(v) for k, v in obj.items()
-                if v is not None and v != [] and not (isinstance(v, float) and math.isnan(v))}
+                if v is not None and not (isinstance(v, list) and not v)
+                and not (isinstance(v, (float, np.floating)) and math.isnan(v))}
     if isinstance(obj, (list, tuple)):
         return [_clean(v) for v in obj]
     if isinstance(obj, (np.floating, np.integer)):
