@@ -191,6 +191,14 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     for k, (lo, hi) in {"friction_pp": (0.3, 0.8), "rolling_friction": (0.2, 0.8)}.items():
         assert lo <= card.soil[k] <= hi and lo <= res["posterior"][k]["lo"] <= res["posterior"][k]["hi"] <= hi
     assert res["calibration"]["runs"] == 3 + 2 * 2 and len(res["verification"]) == 1
+    (check,) = res["verification"][0]["checks"]
+    assert check["quantity"] == "phi_peak_deg" and check["verdict"] in ("within", "outside", "undecided")
+    assert check["difference"] == pytest.approx(check["measured"] - 37.0)
+    # again: the same samples are drawn, every run is reused, the same card comes out
+    assert main(["calibrate", str(DATA / "tiny_target.toml"), "--quick", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["chosen"] == res["chosen"] and "to run" in captured.err
+    assert all(" 0 to run" in ln for ln in captured.err.splitlines() if " to run [" in ln)
     assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
     measured = json.loads(capsys.readouterr().out)
     for a in res["achieved"]:

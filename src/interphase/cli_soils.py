@@ -82,5 +82,9 @@ def _cmd_calibrate(args, print_json) -> int:
             print(f"  {k} = {v:.4g} ({result['posterior'][k]['lo']:.4g}–{result['posterior'][k]['hi']:.4g})")
         for a in result["achieved"]:
             print(f"  {a['quantity']}: target {a['target']:.1f}°, achieved {a['value']:.1f}° "
-                  f"({a['lo']:.1f}–{a['hi']:.1f})")
+                  f"({a['lo']:.1f}–{a['hi']:.1f}): {a['verdict']}")
+        for v in result["verification"]:
+            for c in v["checks"]:
+                print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
+                      f"measured {c['measured']:.1f}° ({c['lo']:.1f}–{c['hi']:.1f}): {c['verdict']}")
     return 0

@@ -261,12 +261,14 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
           f"{len(seeds)} seeds", file=stream, flush=True)
     final, *held_out = run_element(card, [target.normal_stress, *(v["normal_stress"] for v in target.verification)],
                                    seeds, output=element_out, executor=executor, jobs=jobs, stream=stream)
-    achieved = [{"quantity": q, "target": target.values[q], "value": getattr(final, q),
-                 "lo": getattr(final, q + "_lo"), "hi": getattr(final, q + "_hi")} for q in obs]
+    achieved = [{"quantity": c["quantity"], "target": c["laboratory"], "value": c["measured"], "lo": c["lo"],
+                 "hi": c["hi"], "difference": c["difference"], "verdict": c["verdict"]}
+                for c in compare(target.values, final)]
     verification = []
     for v, r in zip(target.verification, held_out):
         verification.append({**v, "measured": {k: val for k, val in r.to_dict().items()
-                                               if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")}})
+                                               if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")},
+                             "checks": compare(v, r)})
     n_runs += len(seeds) * (1 + len(target.verification))
     result = {
         "card": str(card_path), "target": target.name, "chosen": chosen, "posterior": posterior,
@@ -281,6 +283,28 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
 
     pd.DataFrame(history).to_csv(output / "samples.csv", index=False)
     return result
+
+
+def compare(lab: dict, measured) -> list[dict]:
+    """Each laboratory angle of `lab` against the element test `measured` (an ElementResult):
+    difference [°] (measured − laboratory), and the verdict against TOLERANCES: "within" when the
+    point lies within the tolerance, "outside" when the whole 95 % interval lies beyond it, else
+    "undecided" (more seeds would tell)."""
+    out = []
+    for q in QUANTITIES:
+        if q not in lab:
+            continue
+        v, lo, hi = (getattr(measured, q + k) for k in ("", "_lo", "_hi"))
+        d, tol = v - float(lab[q]), TOLERANCES[q]
+        if abs(d) <= tol:
+            verdict = "within"
+        elif math.isfinite(lo) and (lo - lab[q] > tol or lab[q] - hi > tol):
+            verdict = "outside"
+        else:
+            verdict = "undecided"
+        out.append({"quantity": q, "laboratory": float(lab[q]), "measured": v, "lo": lo, "hi": hi,
+                    "difference": d, "tolerance": tol, "verdict": verdict})
+    return out
 
 
 def _iterate(calib, iterations: int) -> None:
