@@ -177,6 +177,10 @@ def test_element_test_runs_and_dense_preparation_is_denser(tmp_path, capsys, mon
     assert main(["element", str(card), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
     captured = capsys.readouterr()
     assert json.loads(captured.out) == d and "0 to run" in captured.err
+    import interphase
+
+    (api,) = interphase.element(card, 100e3, seeds=2)          # the Python API: the same runs, the same numbers
+    assert api["phi_peak_deg"] == d["phi_peak_deg"] and api["solid_fraction"] == d["solid_fraction"]
 
 
 @pytest.mark.liggghts

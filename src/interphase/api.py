@@ -137,3 +137,22 @@ def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | Non
     model = criterion_model(friction, fit, tan_phi)
     res = predict_profile(model, load_profile(str(profile), units, None), d50_mm * 1e-3, friction, None)
     return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
+
+
+def element(card: PathLike, normal_stress: float | list[float], seeds: int = 3, *, runs: PathLike | None = None):
+    """The element test of a soil card (docs/soils.md) at one or more normal stresses [Pa], packing
+    seeds 1…`seeds`: a list of dicts with phi_peak_deg, phi_cs_deg, psi_max_deg and solid_fraction
+    (each with _lo/_hi, 95 % over the seeds), has_peak, order_psi6 and a note. Resumable."""
+    from interphase.campaign.element import run_element
+    from interphase.soil import load_card
+
+    stresses = normal_stress if isinstance(normal_stress, (list, tuple)) else [normal_stress]
+    return [r.to_dict() for r in run_element(load_card(card), stresses, range(1, int(seeds) + 1), output=runs)]
+
+
+def calibrate(target: PathLike, *, quick: bool = False, card: PathLike | None = None, runs: PathLike | None = None):
+    """Calibrate grain parameters to a laboratory target (docs/soils.md); writes the soil card and
+    returns what it holds (chosen parameters, posterior, achieved and held-out checks). Resumable."""
+    from interphase.campaign.calibrate import calibrate as _calibrate
+
+    return _calibrate(target, quick=quick, card_path=card, output=runs)
