@@ -58,15 +58,16 @@ def _line_of(text: str, table: str, key: str) -> int | None:
     return None
 
 
-def load_card(path) -> SoilCard:
-    """Read and check a soil card. Every problem is an InputError naming the file, line and field."""
+def read_toml(path, what: str, fix: str):
+    """(path, text, data, bad) of a TOML file the soil commands read: a missing file or a syntax
+    error is an InputError naming the file; `bad(table, key, message, fix)` builds one naming the
+    file, the line and the field."""
     p = Path(path)
     try:
         text = p.read_text()
         data = tomllib.loads(text)
     except FileNotFoundError:
-        raise InputError("soil card not found", where=str(p), fix="give the path of a soils/NAME.toml card "
-                         "(`campaign calibrate TARGET.toml` writes one)") from None
+        raise InputError(f"{what} not found", where=str(p), fix=fix) from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"TOML syntax error: {exc}", where=str(p)) from None
 
@@ -74,6 +75,31 @@ def load_card(path) -> SoilCard:
         line = _line_of(text, table, key)
         return InputError(msg, where=f"{p}:{line}: [{table}] {key}" if line else f"{p}: [{table}] {key}", fix=fix)
 
+    return p, text, data, bad
+
+
+def soil_fields(table: dict, bad, fix: str) -> dict:
+    """A [soil] table's Case fields, each checked to be one of SOIL_FIELDS."""
+    for key in table:
+        if key not in SOIL_FIELDS:
+            raise bad("soil", key, f"{key!r} is not a soil field", fix)
+    return dict(table)
+
+
+def element_fields(table: dict, bad) -> dict:
+    """The element protocol: ELEMENT_DEFAULTS with an [element] table's values."""
+    element = dict(ELEMENT_DEFAULTS)
+    for key, value in table.items():
+        if key not in ELEMENT_DEFAULTS:
+            raise bad("element", key, f"{key!r} is not an element-test field", f"use {', '.join(ELEMENT_DEFAULTS)}")
+        element[key] = value
+    return element
+
+
+def load_card(path) -> SoilCard:
+    """Read and check a soil card. Every problem is an InputError naming the file, line and field."""
+    p, text, data, bad = read_toml(path, "soil card", "give the path of a soils/NAME.toml card "
+                                   "(`campaign calibrate TARGET.toml` writes one)")
     for key in data:
         if key not in CARD_KEYS:
             raise InputError(f"unknown table [{key}]", where=str(p), fix=f"a soil card has {', '.join(CARD_KEYS)}")
@@ -82,15 +108,9 @@ def load_card(path) -> SoilCard:
         raise InputError("no [soil] table", where=str(p), fix=f"give the grains' Case fields: {', '.join(SOIL_FIELDS)}")
     name = soil.pop("name", p.stem)
     description = soil.pop("description", "")
-    for key in soil:
-        if key not in SOIL_FIELDS:
-            raise bad("soil", key, f"{key!r} is not a soil field", f"a card sets only {', '.join(SOIL_FIELDS)}; "
-                      "surface and test fields belong in the campaign")
-    element = dict(ELEMENT_DEFAULTS)
-    for key, value in data.get("element", {}).items():
-        if key not in ELEMENT_DEFAULTS:
-            raise bad("element", key, f"{key!r} is not an element-test field", f"use {', '.join(ELEMENT_DEFAULTS)}")
-        element[key] = value
+    soil = soil_fields(soil, bad, f"a card sets only {', '.join(SOIL_FIELDS)}; surface and test fields belong in "
+                       "the campaign")
+    element = element_fields(data.get("element", {}), bad)
     card = SoilCard(name=str(name), path=p.resolve(), soil=soil, element=element, description=str(description),
                     extra={k: data[k] for k in CARD_KEYS[2:] if k in data})
     try:                               # every field checked now, as the Case would

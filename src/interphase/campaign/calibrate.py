@@ -43,7 +43,6 @@ from __future__ import annotations
 import math
 import sys
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,7 +51,7 @@ import tomli_w
 
 from interphase.campaign.element import element_of, run_cases, run_element, write_campaign
 from interphase.errors import InputError
-from interphase.soil import ELEMENT_DEFAULTS, SOIL_FIELDS, SoilCard, _line_of, load_card
+from interphase.soil import SOIL_FIELDS, SoilCard, element_fields, load_card, read_toml, soil_fields
 
 QUANTITIES = ("phi_peak_deg", "phi_cs_deg", "psi_max_deg")
 TOLERANCES = {"phi_peak_deg": 1.5, "phi_cs_deg": 1.5, "psi_max_deg": 2.0}     # [°]
@@ -78,19 +77,7 @@ class Target:
 
 
 def load_target(path) -> Target:
-    p = Path(path)
-    try:
-        text = p.read_text()
-        data = tomllib.loads(text)
-    except FileNotFoundError:
-        raise InputError("target file not found", where=str(p), fix="give a calibration target TOML") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"TOML syntax error: {exc}", where=str(p)) from None
-
-    def bad(table, key, msg, fix=None):
-        line = _line_of(text, table, key)
-        return InputError(msg, where=f"{p}:{line}: [{table}] {key}" if line else f"{p}: [{table}] {key}", fix=fix)
-
+    p, text, data, bad = read_toml(path, "target file", "give a calibration target TOML")
     for key in data:
         if key not in ("target", "soil", "free", "element", "budget", "verification"):
             raise InputError(f"unknown table [{key}]", where=str(p),
@@ -121,10 +108,7 @@ def load_target(path) -> Target:
     if values["phi_cs_deg"] > values["phi_peak_deg"]:
         raise bad("target", "phi_cs_deg", f"φ_cs {values['phi_cs_deg']}° exceeds φ_peak {values['phi_peak_deg']}°",
                   "φ_cs ≤ φ_peak: check the two values against their source")
-    soil = dict(data.get("soil", {}))
-    for key in soil:
-        if key not in SOIL_FIELDS:
-            raise bad("soil", key, f"{key!r} is not a soil field", f"use {', '.join(SOIL_FIELDS)}")
+    soil = soil_fields(data.get("soil", {}), bad, f"use {', '.join(SOIL_FIELDS)}")
     free = {}
     for key, rng in data.get("free", {}).items():
         if key not in FREE_FIELDS:
@@ -142,11 +126,7 @@ def load_target(path) -> Target:
         free[key] = (float(rng[0]), float(rng[1]))
     if not free:
         raise InputError("no [free] parameter", where=str(p), fix=f"free some of {', '.join(FREE_FIELDS)} with ranges")
-    element = dict(ELEMENT_DEFAULTS)
-    for key, v in data.get("element", {}).items():
-        if key not in ELEMENT_DEFAULTS:
-            raise bad("element", key, f"{key!r} is not an element-test field", f"use {', '.join(ELEMENT_DEFAULTS)}")
-        element[key] = v
+    element = element_fields(data.get("element", {}), bad)
     budget = dict(BUDGET)
     raw_budget = data.get("budget", {})
     quick = dict(QUICK) | raw_budget.get("quick", {})
