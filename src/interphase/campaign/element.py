@@ -21,14 +21,18 @@ from interphase.soil import SoilCard
 
 
 def write_campaign(path: Path, *, name: str, case: dict, sweep: dict | None = None, zip_: dict | None = None,
-                   executor: str = "local", jobs: int = 0, description: str = "") -> Path:
-    """A campaign file of box cases (plain data → TOML); `output` is the file's own folder."""
+                   groups: list[dict] | None = None, executor: str = "local", jobs: int = 0,
+                   description: str = "") -> Path:
+    """A campaign file (plain data → TOML: [case], [sweep], [zip], [[group]]); `output` is the file's
+    own folder. Rewritten only when its content changes."""
     data = {"campaign": {"name": name, "description": description, "engines": ["liggghts"], "output": "."},
             "execution": {"executor": executor, "jobs": int(jobs)}, "case": case}
     if sweep:
         data["sweep"] = sweep
     if zip_:
         data["zip"] = zip_
+    if groups:
+        data["group"] = groups
     path.parent.mkdir(parents=True, exist_ok=True)
     text = tomli_w.dumps(data)
     if not path.exists() or path.read_text() != text:

@@ -1,0 +1,85 @@
+"""`campaign validate --simulate`: every laboratory row as an interface case of the calibrated soil,
+through the campaign machinery (a generated campaign file, resumable, local or SLURM).
+
+One group per row: the rebuilt surface (its geometry in D50 units of the laboratory's soil, so the
+card's grains meet teeth of the same relative size), the row's normal stress and particle–surface
+friction, packing seeds 1…N, and the paired soil test of the card's grains at that stress. The
+interface protocol is the campaigns' (PROTOCOL: the 40 × 25 D50 periodic cell at 0.02 m/s over 6 mm,
+docs/convergence.md), not the element test's cell.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from interphase.campaign.element import write_campaign
+from interphase.errors import InputError
+
+PROTOCOL = {"test": "interface", "device": "periodic", "shear_velocity": 0.02, "shear_distance": 0.006,
+            "snapshot_every": 0.0005, "box_length_d50": 40.0, "box_height_d50": 25.0, "friction_pw": 0.9}
+
+
+def profile_spec(row, d50: float, folder: Path) -> dict:
+    """The campaign profile of a lab row in the card's D50 units (sawtooth, flat; a ramp as a file)."""
+    from interphase.lab import _geometry, profile_of
+
+    def never(field, msg, fix=None):
+        raise InputError(msg, where=field, fix=fix)
+
+    kind = row["surface"].lower()
+    if kind == "flat":
+        return {"kind": "flat"}
+    h, w, sr = _geometry(row, never)
+    lab_d50 = float(row["d50"])
+    if kind == "sawtooth":
+        return {"kind": "sawtooth", "rt": h / lab_d50, "sw": w / lab_d50, "sr": sr / lab_d50}
+    prof = profile_of(row, lab_d50).scaled(d50 / lab_d50)
+    path = folder / "profiles" / f"row{int(row['row'])}.csv"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame({"x": prof.x, "z": prof.z}).to_csv(path, index=False, header=False)
+    return {"kind": "file", "path": str(path.resolve()), "units": "m"}
+
+
+def simulate(table, card, seeds, *, output: Path, executor: str | None = None, jobs: int | None = None,
+             stream=None) -> pd.DataFrame:
+    """DEM δ at the peak (seed ensemble, 95 % interval) per laboratory row: columns row,
+    delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds."""
+    from interphase.api import ensembles
+    from interphase.campaign.element import run_cases
+
+    output = Path(output)
+    from interphase.analysis.validation import row_friction
+
+    case = {"soil": str(Path(card.path).resolve()), **PROTOCOL}
+    groups = []
+    for _, r in table.rows.iterrows():
+        groups.append({"name": f"row{int(r['row'])}",
+                       "case": {"profile": profile_spec(r, float(card.soil["d50"]), output),
+                                "normal_stress": float(r["normal_stress"]),
+                                "friction_ps": row_friction(r)[0]}})
+    path = write_campaign(output / "simulate.toml", name="validate", case=case, groups=groups,
+                          sweep={"seed": [int(s) for s in seeds]}, executor=executor or "local",
+                          description=f"{table.path} on the soil card {card.path}")
+    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr)
+    try:
+        ens = ensembles(path)
+    except InputError:
+        ens = pd.DataFrame(columns=["group", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_phi", "seeds"])
+    deg = lambda t: np.degrees(np.arctan(pd.to_numeric(t, errors="coerce")))
+    out = pd.DataFrame({"row": ens["group"].astype(str).str.removeprefix("row").astype(int),
+                        "delta_dem_deg": deg(ens["tan_delta"]), "delta_dem_lo_deg": deg(ens["tan_delta_lo"]),
+                        "delta_dem_hi_deg": deg(ens["tan_delta_hi"]), "phi_dem_deg": deg(ens["tan_phi"]),
+                        "dem_seeds": ens["seeds"]}) if len(ens) else pd.DataFrame(
+        columns=["row", "delta_dem_deg", "delta_dem_lo_deg", "delta_dem_hi_deg", "phi_dem_deg", "dem_seeds"])
+    return out
+
+
+def with_dem(pred: pd.DataFrame, dem: pd.DataFrame) -> pd.DataFrame:
+    df = pred.merge(dem, on="row", how="left")
+    df["error_dem_deg"] = df["delta_dem_deg"] - df["delta_measured_deg"]
+    return df
+

@@ -1,0 +1,93 @@
+"""Laboratory files (interphase.lab) and `campaign validate`: the reader's checks name file, CSV line
+and field; the rebuilt surfaces; the criterion and both baselines per row."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from interphase.errors import InputError
+from interphase.lab import profile_of, read_lab
+
+ROOT = Path(__file__).resolve().parents[1]
+HEAD = ("soil,d50_mm,surface,asperity_height_mm,asperity_width_mm,root_spacing_mm,normal_stress_kpa,"
+        "delta_peak_deg,soil_phi_peak_deg,source,table_or_figure")
+# synthetic rows (no laboratory's numbers): shapes and checks only
+GOOD = [
+    "Ottawa 20/30 sand (synthetic),0.72,sawtooth,0.5,1.0,0,100,30,36,synthetic test row,none",
+    "Ottawa 20/30 sand (synthetic),0.72,flat,,,,100,12,36,synthetic test row,none",
+    "Ottawa 20/30 sand (synthetic),0.72,ramp,0.3,2.0,0,100,25,36,synthetic test row,none",
+]
+
+
+def _write(tmp_path: Path, lines, head=HEAD) -> Path:
+    p = tmp_path / "lab.csv"
+    p.write_text("\n".join([head, *lines]) + "\n")
+    return p
+
+
+def test_reader_converts_units_and_keeps_lines(tmp_path):
+    head = HEAD.replace("d50_mm", "d50_um").replace("normal_stress_kpa", "normal_stress_pa")
+    rows = [GOOD[0].replace(",0.72,", ",720,").replace(",100,", ",100000,")]
+    t = read_lab(_write(tmp_path, rows, head))
+    r = t.rows.iloc[0]
+    assert r["row"] == 2 and r["d50"] == pytest.approx(0.72e-3) and r["normal_stress"] == pytest.approx(1e5)
+    assert r["asperity_height"] == pytest.approx(0.5e-3)
+
+
+@pytest.mark.parametrize("change, field", [
+    (lambda h, r: (h, [r.replace("synthetic test row,none", ",none")]), "source"),
+    (lambda h, r: (h.replace("asperity_height_mm", "asperity_height_in"), [r]), "asperity_height_in"),
+    (lambda h, r: (h, [r.replace("sawtooth", "knurled")]), "surface"),
+    (lambda h, r: (h, [r.replace("sawtooth,0.5", "sawtooth,")]), "asperity_height"),
+    (lambda h, r: (h, [r.replace(",100,30,", ",100 kPa,30,")]), "normal_stress_kpa"),
+])
+def test_bad_rows_exit_2_naming_file_line_and_field(tmp_path, change, field):
+    head, rows = change(HEAD, GOOD[0])
+    p = _write(tmp_path, [GOOD[1], *rows], head)
+    with pytest.raises(InputError) as exc:
+        read_lab(p)
+    msg = str(exc.value)
+    assert str(p) in msg and field in msg
+    if field != "asperity_height_in":          # a header problem has no row
+        assert f"{p}:3" in msg
+    out = subprocess.run([sys.executable, "-m", "interphase.cli", "validate", str(p)], capture_output=True, text=True)
+    assert out.returncode == 2 and field in out.stderr and "Traceback" not in out.stderr
+
+
+def test_rebuilt_surfaces(tmp_path):
+    from interphase.surface.normals import theta_a
+
+    t = read_lab(_write(tmp_path, GOOD))
+    saw, flat, ramp = (profile_of(t.rows.iloc[i]) for i in range(3))
+    d50 = 0.72e-3
+    assert math.isnan(theta_a(flat, d50).theta_a_deg)
+    # teeth 0.5 mm high on a 1 mm base: faces at 45°; the centroid trace rounds them, θa below 45°
+    assert 20 < theta_a(saw, d50).theta_a_deg < 45
+    # a ramp resists more against its vertical face than up its slope
+    r = t.rows.iloc[2].copy()
+    r["direction"] = "-"
+    assert theta_a(profile_of(r), d50).theta_a_deg > theta_a(ramp, d50).theta_a_deg + 10
+
+
+def test_validate_prints_criterion_and_baselines(tmp_path):
+    p = _write(tmp_path, GOOD)
+    out = subprocess.run([sys.executable, "-m", "interphase.cli", "validate", str(p), "-o", str(tmp_path / "v"),
+                          "--json"], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    res = json.loads(out.stdout)
+    rows = res["table"]
+    assert [r["row"] for r in rows] == [2, 3, 4]
+    flat = rows[1]
+    assert flat["delta_rule_deg"] == pytest.approx(math.degrees(math.atan(0.2)))   # sand: tan φμ 0.2 (seed §6.4.6)
+    assert all(r["delta_soil_deg"] == 36 for r in rows)
+    for r in rows:
+        assert r["error_predicted_deg"] == pytest.approx(r["delta_predicted_deg"] - r["delta_measured_deg"])
+    assert {s["prediction"] for s in res["skill"]} == {"criterion", "δ = φ (soil)", "δ = min(φμ + θa, φ)"}
+    assert res["largest_miss"]["row"] in (2, 3, 4)
+    assert (tmp_path / "v" / "validation.png").stat().st_size > 10_000
