@@ -56,7 +56,11 @@ def check_outputs(folder: Path, groups, lab: bool = False) -> None:
         check_latex((folder / "tables" / f"{t}.tex").read_text())
     html = (folder / "index.html").read_text()
     links = re.findall(r'(?:href|src)="([^"]+)"', html)
-    assert links and all((folder / link).is_file() for link in links)
+    files = [link for link in links if not link.startswith("#")]
+    assert files and all((folder / link).is_file() for link in files)
+    ids = set(re.findall(r'id="([^"]+)"', html))
+    anchors = [link[1:] for link in links if link.startswith("#")]
+    assert anchors and all(a in ids for a in anchors)          # the contents list points at the page's parts
     for stem in FIGS:
         assert f"figures/{stem}.png" in html
 
