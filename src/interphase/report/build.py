@@ -369,7 +369,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         if paths:
             figs.append((title, paths))
         else:
-            not_drawn.append((title, why or "not drawn: nothing to draw"))
+            not_drawn.append((title, why or "nothing to draw"))
 
     corr_why = lambda keys: F.empty_reason(points, keys)
     add("Fig. 6.3: strength vs θn and θr at the surface (a, b) and in the sampling region (c, d)",
@@ -381,7 +381,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         if len(summaries) else 0.7e-3
     add("Fig. 6.6: polar distributions of centroid-trace normals", F.figure_6_6(_profiles_for_polar(campaign, points),
                                                                                d50 if math.isfinite(d50) else 0.7e-3, fdir),
-        "not drawn: no surface profile (the campaign file was not given, or it has only flat surfaces)")
+        "no surface profile (the campaign file was not given, or it has only flat surfaces)")
     add("Fig. 6.7: peak stress ratio vs θa, both filters",
         F.correlation_figure(points, fits, ["fig6_7a", "fig6_7b"], "fig6_7", fdir, "Fig. 6.7: peak stress ratio vs θa"),
         corr_why(["fig6_7a", "fig6_7b"]))

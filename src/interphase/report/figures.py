@@ -163,7 +163,11 @@ def correlation_panel(ax, points, spec_key: str, fit_results, colour, marker, le
     ax.set_xlabel(spec.x_label)
     ax.set_ylabel(spec.y_label)
     seeds = pd.to_numeric(pts.get("seeds", pd.Series(dtype=float)), errors="coerce")
-    what = (f"n = {n} physical cases, seed means ± 95 %" if len(seeds) and (seeds > 1).any() else f"n = {n}")
+    bars = any(f"{c}_lo" in pts and np.isfinite(pd.to_numeric(pts[f"{c}_lo"], errors="coerce")).any()
+               for c in (spec.x, spec.y) if c not in SEED_INVARIANT)
+    what = (f"n = {n} physical cases, seed means ± 95 %" if bars else
+            f"n = {n} physical cases, seed means; no interval below 3 seeds" if len(seeds) and (seeds > 1).any()
+            else f"n = {n}")
     ax.set_title(f"Fig. {spec.figure}: {spec.title}\n({what})", fontsize=9)
     ax.grid(alpha=0.3)
 
@@ -220,7 +224,7 @@ def empty_reason(points: pd.DataFrame, keys) -> str:
     specs = [SPECS[k] for k in keys]
     where = {s.subset for s in specs if s.subset} or {""}
     sub = f" among the {'/'.join(sorted(where)).replace('_', '-')} surfaces" if where != {""} else ""
-    return (f"not drawn: no physical case{sub} has both " + "; ".join(f"{s.x} and {s.y}" for s in specs)
+    return (f"no physical case{sub} has both " + "; ".join(f"{s.x_label} and {s.y_label}" for s in specs)
             + " (n = 0)")
 
 
@@ -273,7 +277,7 @@ def rnc_reason(points: pd.DataFrame) -> str:
             np.isfinite(pd.to_numeric(points["peak_stress_ratio"], errors="coerce"))
         if both.any():
             return ""
-    return "not drawn: no physical case has both Rnc(D50) and a peak stress ratio (n = 0)"
+    return "no physical case has both Rnc(D50) and a peak stress ratio (n = 0)"
 
 
 def figure_6_6(profiles: list[tuple[str, object]], d50: float, folder: Path, bins: int = 72) -> list[Path]:
@@ -313,12 +317,22 @@ def figure_6_6(profiles: list[tuple[str, object]], d50: float, folder: Path, bin
 CURVE_PANEL_COLS = 2      # curve panels per row
 
 
+def short_names(names) -> dict[str, str]:
+    """{name: the name without the `-`-separated words every name shares} ("quick-rt0.5-mu0.2" and
+    "quick-rt1-mu0.2" → "rt0.5", "rt1"); a name left empty keeps its full form."""
+    names = list(names)
+    words = [n.split("-") for n in names]
+    common = set.intersection(*(set(w) for w in words)) if len(names) > 1 else set()
+    return {n: "-".join(x for x in w if x not in common) or n for n, w in zip(names, words)}
+
+
 def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder: Path,
                   panels: dict[str, str] | None = None) -> list[Path]:
     """Stress ratio [-] vs shear displacement [mm], faceted: one panel per `panels[label]` (e.g.
     "tan φμ = 0.2"; one panel without `panels`), one colour per physical case (a label without its
-    `-sN`), its seeds in that colour; each panel's legend names its physical cases and their seed
-    counts, below the panel and inside the image. No paths (nothing drawn) without a curve."""
+    `-sN`), its seeds in that colour; each panel's legend, right of it and inside the image, names
+    its physical cases by what tells them apart (`short_names`) and their seed counts. No paths
+    (nothing drawn) without a curve."""
     from interphase.analysis.ensemble import physical_case
 
     if not curves:
@@ -327,33 +341,42 @@ def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder
     by_panel: dict[str, dict[str, list[str]]] = {}
     for label in sorted(curves):
         by_panel.setdefault(str(panels.get(label, "")), {}).setdefault(physical_case(label), []).append(label)
+    short = short_names({c for cases in by_panel.values() for c in cases})
     names = sorted(by_panel)
     ncol = min(CURVE_PANEL_COLS, len(names))
     nrow = math.ceil(len(names) / ncol)
     most = max(len(c) for c in by_panel.values())
-    key_rows = math.ceil(most / 2)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, nrow * (3.4 + 0.17 * key_rows)), squeeze=False)
+    key_cols = 1 if most <= 14 else 2
+    key_width = 0.09 * max(len(v) for v in short.values()) + 0.9
+    fig, axes = plt.subplots(nrow, ncol, figsize=(ncol * (4.6 + key_cols * key_width), nrow * max(3.4, 0.2 * most / key_cols + 1.2)),
+                             squeeze=False, layout="constrained")
     for ax, name in zip(axes.ravel(), names):
         cases = by_panel[name]
         cmap = plt.get_cmap("tab10" if len(cases) <= 10 else "tab20" if len(cases) <= 20 else "viridis")
-        for i, (case, labels) in enumerate(sorted(cases.items())):
+        for i, (case, labels) in enumerate(sorted(cases.items(), key=lambda kv: _natural(short[kv[0]]))):
             c = cmap(i % 20 if len(cases) <= 20 else i / max(len(cases) - 1, 1))
             for j, label in enumerate(labels):
                 s = curves[label]
                 y = s["stress_ratio_smooth"] if "stress_ratio_smooth" in s else s["stress_ratio"]
                 ax.plot(s["shear_disp"] * 1e3, y, lw=0.9, color=c, alpha=0.85,
-                        label=f"{case} ({len(labels)} seed{'s' if len(labels) > 1 else ''})" if j == 0 else None)
+                        label=f"{short[case]} ({len(labels)} seed{'s' if len(labels) > 1 else ''})" if j == 0 else None)
         ax.set_xlabel("shear displacement [mm]")
         ax.set_ylabel("stress ratio [-]")
         ax.set_title(name or title, fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6.5, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.2), frameon=False,
+        ax.legend(fontsize=7, ncol=key_cols, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False,
                   handlelength=1.5, columnspacing=1.0)
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
     fig.suptitle(f"{title}\n(surface ΣFx/Σ−Fz; box τ/σ; one colour per physical case, its seeds alike)", fontsize=10)
-    fig.tight_layout()
     return save(fig, folder, stem)
+
+
+def _natural(text: str):
+    """Sort key that orders rt0.5 before rt1 before rt10."""
+    import re
+
+    return [float(t) if re.fullmatch(r"\d+(\.\d+)?", t) else t for t in re.split(r"(\d+(?:\.\d+)?)", text)]
 
 
 def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[Path]:
