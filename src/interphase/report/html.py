@@ -64,7 +64,8 @@ def html_table(df, notes=()) -> str:
         cells = []
         for v, r in zip(row, right):
             text = _cell(v)
-            cls = "num" if r else "long" if len(text) > LONG_CELL else ""
+            # a number stays on one line; a value with its interval may break before the bracket
+            cls = ("num wrap" if " " in text else "num") if r else "long" if len(text) > LONG_CELL else ""
             cells.append(f"<td{attr(cls)}>{escape(text)}</td>")
         rows.append("<tr>" + "".join(cells) + "</tr>")
     note = "".join(f'<p class="tnote">{escape(n)}</p>' for n in notes)

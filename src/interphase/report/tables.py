@@ -55,8 +55,8 @@ _TEX_SEQ = {"φμ": (r"\phi_\mu", True), "₅₀": (r"_{50}", True), "D50": (r"D
 _TEX_UNI = {"θ": r"\theta", "φ": r"\phi", "μ": r"\mu", "δ": r"\delta", "ψ": r"\psi", "σ": r"\sigma", "τ": r"\tau",
             "β": r"\beta", "Σ": r"\Sigma", "±": r"\pm", "°": r"^\circ", "≥": r"\geq", "≤": r"\leq", "·": r"\cdot",
             "₊": r"_+", "−": "-", "²": "^2", "≈": r"\approx", "×": r"\times", "→": r"\rightarrow", "∝": r"\propto",
-            "√": r"\surd", "ᵀ": r"^{\mathrm{T}}", "₀": "_0", "₅": "_5"}
-_TEX_TEXT = {"–": "--", "—": "---", "…": r"\ldots{}", "§": r"\S{}", "’": "'", "‘": "`", "“": "``", "”": "''",
+            "√": r"\surd", "ᵀ": r"^{\mathrm{T}}", "₀": "_0", "₅": "_5", "§": r"\S"}
+_TEX_TEXT = {"–": "--", "—": "---", "…": r"\ldots{}", "’": "'", "‘": "`", "“": "``", "”": "''",
              "\u00a0": "~"}
 
 
@@ -406,13 +406,37 @@ def coefficient_table(fit_results) -> Table:
     order = ["figure", "y", "x", "model", "slice", "n", "b0", "b0 95%", "b1", "b1 95%", "b2", "b2 95%", "c",
              "c 95% (profile)", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)", "R² [-]", "note"]
     df = df.reindex(columns=[c for c in order if c in df.columns])
+    shown = _coefficients_shown(df)
     return Table("correlations", "Bilinear correlations: hinge y = b0 + b1·x + b2·(x − c)₊, plateau y = b0 + b1·min(x, c)",
-                 df, ["x, c in the x column's units (angles ψ in degrees unless ccw); n: physical cases (seed "
+                 shown, ["x, c in the x column's units (angles ψ in degrees unless ccw); n: physical cases (seed "
                       "means). Intervals 95 %: coefficients and c by the bootstrap the 'bootstrap' column names — "
                       "seed: every physical case's seeds (and its box tests') drawn with replacement, means refitted; "
                       "residual: fitted + resampled residuals (where fewer than half the cases have two seeds) — c "
                       "also by profile likelihood (F test) and, beside a seed bootstrap, by the residual bootstrap "
-                      "on the same means (docs/methods.md §7)."])
+                      "on the same means (docs/methods.md §7)."], csv=df)
+
+
+def _coefficients_shown(df: pd.DataFrame) -> pd.DataFrame:
+    """The coefficients table as printed: each coefficient with its interval in one cell
+    ("0.218 [0.200, 0.233]"), y against x in one column; the CSV keeps one column per number."""
+    col = lambda c: df[c] if c in df else pd.Series("", index=df.index)
+    both = lambda v, iv: "–" if not (isinstance(v, (int, float)) and math.isfinite(v)) else \
+        f"{_fmt(v, 3)} {iv}".strip() if isinstance(iv, str) else _fmt(v, 3)
+    out = pd.DataFrame({"figure": col("figure"), "y against x": [f"{y} against {x}" for y, x in zip(col("y"), col("x"))],
+                        "model": col("model"), "slice": col("slice"), "n": col("n")})
+    for b in ("b0", "b1", "b2"):
+        if b in df:
+            out[f"{b} [95 %]"] = [both(v, iv) for v, iv in zip(df[b], col(f"{b} 95%"))]
+    if "c" in df:
+        out["c [95 % profile]"] = [both(v, iv) for v, iv in zip(df["c"], col("c 95% (profile)"))]
+    if "c 95% (bootstrap)" in df:
+        out["c 95 % bootstrap"] = [f"{iv} ({b})" if isinstance(iv, str) and iv and isinstance(b, str) else
+                                   (iv if isinstance(iv, str) else "") for iv, b in zip(df["c 95% (bootstrap)"], col("bootstrap"))]
+    if "c 95% (residual)" in df:
+        out["c 95 % residual"] = col("c 95% (residual)").fillna("")
+    out["R² [-]"] = col("R² [-]")
+    out["note"] = col("note").fillna("")
+    return out
 
 
 def _safe(name) -> str:
