@@ -406,7 +406,9 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
             curves = _curves(store, g.sort_values("label"))
             if curves:
                 add(f"Stress ratio vs shear displacement, {grp}",
-                    F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ({len(curves)} runs)",
+                    F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ("
+                                    + (f"{len(curves)} runs" if len(curves) == len(g) else
+                                       f"the first {len(curves)} of {len(g)} runs by label") + ")",
                                     f"curves_{T._safe(grp)}", fdir, curve_panels(g)))
         add_net = _networks(store, runs, fdir, res, campaign)
         figs += add_net
