@@ -421,8 +421,8 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     from interphase.report.html import render_page
 
     fig_entries = [{"title": t, "png": p[0].relative_to(out).as_posix(),
-                    "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None, "anchor": f"fig-{i}"}
-                   for i, (t, p) in enumerate(figs)]
+                    "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None, "anchor": f"fig-{i}",
+                    "width": _shown_width(p[0])} for i, (t, p) in enumerate(figs)]
     res.not_drawn = not_drawn
     for e in table_entries:
         e["html"] = Markup(e["html"])
@@ -487,6 +487,21 @@ def build_animations(campaign_path: str | Path, keys, out: str | Path | None = N
     finally:
         store.close()
     return paths
+
+
+#: CSS pixels per inch of figure on the page: a figure keeps its drawn proportions to the text (a one-panel
+#: figure is not blown up to the page's width; max-width still shrinks a wide one to fit)
+PAGE_PX_PER_INCH = 120
+
+
+def _shown_width(png: Path) -> int:
+    """The width [CSS px] a figure's PNG is shown at: its size in inches (DPI from the file, else
+    figures.DPI) × PAGE_PX_PER_INCH."""
+    from PIL import Image
+
+    with Image.open(png) as im:
+        dpi = float((im.info.get("dpi") or (F.DPI,))[0]) or F.DPI
+        return int(round(im.size[0] / dpi * PAGE_PX_PER_INCH))
 
 
 def _clean(d: dict) -> dict:
