@@ -256,7 +256,8 @@ def quick_shaped_report(tmp_path_factory):
 
     tmp = tmp_path_factory.mktemp("quickshape")
     toml = tmp / "quick.toml"
-    toml.write_text(QUICK.read_text().replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
+    text = "\n".join(line for line in QUICK.read_text().splitlines() if not line.startswith("output ="))
+    toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
     table, _ = synthetic_restore(toml, tmp / "record", seed=3)
     assert main(["run", str(toml), "--restore", str(table)]) == 0
     seen, original = {}, F.save
