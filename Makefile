@@ -6,10 +6,13 @@ VENV := .venv
 PY := $(VENV)/bin/python
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 # the engines (with their recommended packages) and a one-node SLURM for the cluster tests (without);
+# for the report's tests (without recommends): LaTeX to compile its tables (booktabs, graphicx, geometry),
+# poppler-utils (pdftotext, pdffonts) to read them back, Chromium to load its page headless;
 # binaries are checked by name and their packages installed if absent
 ENGINE_DEBS := liggghts yade
 SLURM_DEBS := munge slurmctld slurmd slurm-client
-BINS := liggghts yade munged slurmctld slurmd sbatch
+REPORT_DEBS := texlive-latex-base texlive-latex-recommended poppler-utils chromium
+BINS := liggghts yade munged slurmctld slurmd sbatch pdflatex pdftotext pdffonts chromium
 
 .PHONY: all deps debs venv test run bench clean
 
@@ -21,7 +24,7 @@ debs:
 	  echo "installing Debian packages (missing:$$missing)"; \
 	  $(SUDO) apt-get update -qq && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(ENGINE_DEBS) python3-venv && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(SLURM_DEBS); \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(SLURM_DEBS) $(REPORT_DEBS); \
 	fi
 
 $(VENV)/.installed: pyproject.toml

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-from interphase.analysis.ensemble import physical_case, ratio_interval
+from interphase.analysis.ensemble import MIN_SEEDS, physical_case, ratio_interval, seed_interval
 
 MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
@@ -455,12 +455,14 @@ def _group_sd(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray
     return mean, np.where(n >= 2, sd, np.nan), n
 
 
-def _group_t(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per code 0..k−1: mean of the finite values, the 95 % Student-t interval of that mean (NaN below
-    two values; the formula of analysis.ensemble.t_interval) and the count."""
+def _group_t(values: np.ndarray, codes: np.ndarray, k: int,
+             quantity: str | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per code 0..k−1: mean of the finite values, the 95 % interval of that mean and the count. The
+    interval is analysis.ensemble.seed_interval's: Student t, on the log scale for a positive ratio,
+    clipped to an angle's range, NaN below MIN_SEEDS values (`quantity` names the column)."""
     mean, sd, n = _group_sd(values, codes, k)
-    half = stats.t.ppf(0.975, np.maximum(n - 1, 1)) * sd / np.sqrt(np.maximum(n, 1))
-    return mean, mean - half, mean + half, n
+    lo, hi = seed_interval(mean, sd, n, quantity)
+    return mean, np.asarray(lo, float), np.asarray(hi, float), n
 
 
 def _padded(values: np.ndarray, codes: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -504,8 +506,8 @@ class SeedEnsemble:
     """A campaign's interface runs grouped by physical case (group, label without `-sN`).
 
     points  one row per physical case, index 0..K−1 (= column `case_index`): every AVERAGED column is
-            the mean over its seeds, with `<col>_lo`/`<col>_hi` (95 % Student t over the seeds, NaN for
-            one seed); `seeds` (runs), `box_seeds`; `peak_stress_ratio` = tan δ and `efficiency` = E
+            the mean over its seeds, with `<col>_lo`/`<col>_hi` (95 %, analysis.ensemble.seed_interval:
+            Student t over the seeds respecting the column's range, NaN below 3 seeds); `seeds` (runs), `box_seeds`; `peak_stress_ratio` = tan δ and `efficiency` = E
             are the seed ensemble's (the ensembles table's when it was given); `tan_phi` its box tests'.
     runs    the run-level points (prepare_points) with `case_index` and `tan_delta_seed` (each run's
             value that the ensemble's tan δ averages: its peak state, else its own peak).
@@ -633,9 +635,10 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
         if c not in runs:
             continue
         v = (runs["tan_delta_seed"] if c == "peak_stress_ratio" else pd.to_numeric(runs[c], errors="coerce"))
-        mean, lo, hi, _ = _group_t(v.to_numpy(float), codes, k)
+        mean, lo, hi, _ = _group_t(v.to_numpy(float), codes, k, c)
         pts[c], pts[f"{c}_lo"], pts[f"{c}_hi"] = mean, lo, hi
-    bmean, blo, bhi, _ = _group_t(box_values.ravel(), np.repeat(np.arange(m), width), m) if m else ([], [], [], [])
+    bmean, blo, bhi, _ = (_group_t(box_values.ravel(), np.repeat(np.arange(m), width), m, "tan_phi") if m
+                          else ([], [], [], []))
     has = box_of_case >= 0
     for suffix, arr in (("", bmean), ("_lo", blo), ("_hi", bhi)):
         pts[f"tan_phi{suffix}"] = np.where(has, np.asarray(arr, float)[np.maximum(box_of_case, 0)] if m else np.nan,
@@ -650,6 +653,8 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     else:
         b_mean = b_sd = b_n = np.full(k, np.nan)
     lo, hi = ratio_interval(a_mean, a_sd, a_n, b_mean, b_sd, b_n)
+    few = (a_n < MIN_SEEDS) | (b_n < MIN_SEEDS)            # as every other interval: none below 3 seeds a side
+    lo, hi = np.where(few, np.nan, lo), np.where(few, np.nan, hi)
     pts["efficiency_lo"], pts["efficiency_hi"] = (np.where(has, lo, np.nan), np.where(has, hi, np.nan)) if k else ([], [])
     if ensembles is not None and len(ensembles) and k:
         tab = ensembles.assign(group=ensembles["group"].astype(str), case=ensembles["case"].astype(str))

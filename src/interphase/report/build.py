@@ -3,9 +3,10 @@ model `campaign predict --fit` uses.
 
 Output folder (default: the campaign's output folder + "/report"):
   tables/   table_6_1_inputs, table_6_2_random (if any), results_<group>, correlations, lab_comparison
-            — each .csv, .md, .tex
+            — each .csv, .md, .tex (LaTeX: plain ASCII, booktabs); tables_preview.tex \\input's them all
   figures/  fig6_3, fig6_5, fig6_6, fig6_7, fig6_8, fig6_9, fig6_10a, (fig6_10b_lab), curves_<group>,
-            network_<case> — each .png and .pdf (networks: PNG)
+            network_<case> — each .png (300 dpi) and .pdf (networks: PNG); a figure with nothing to
+            draw (Fig. 6.9 without flat-spaced surfaces) is left out and the page says why
   correlations.json   the fits (BilinearFit.to_dict rows)
   index.html          links them all
 Seeds: every figure, results table and fit is per PHYSICAL case (a case label without `-sN`): the
@@ -31,6 +32,7 @@ from interphase.analysis.criterion import CriterionModel, check_cases, check_sum
 from interphase.errors import InputError
 from interphase.report import figures as F
 from interphase.report import tables as T
+from interphase.report.html import html_table
 
 MAX_CURVES = 60            # stress-ratio curves per group figure (more become unreadable)
 NETWORK_CASES = 2          # force networks: the strongest and the weakest interface case
@@ -48,6 +50,7 @@ class ReportResult:
     runs: pd.DataFrame | None = None          # one row per run (prepare_points), for the force networks
     ensemble: SeedEnsemble | None = None
     criterion_check: pd.DataFrame | None = None   # criterion_checks: the chain against every case
+    not_drawn: list = field(default_factory=list)   # (figure title, why) of figures with nothing to draw
 
 
 def ensemble_points(summaries: pd.DataFrame, store=None, *, e_note: float = 1.2) -> tuple[SeedEnsemble, pd.DataFrame | None]:
@@ -191,6 +194,22 @@ def _profiles_for_polar(campaign, points) -> list[tuple[str, object]]:
         if len(chosen) >= MAX_POLAR:
             break
     return chosen
+
+
+def curve_panels(rows: pd.DataFrame) -> dict[str, str]:
+    """{label: its panel in the curves figure}: interface runs by friction (and gradation where the
+    rows have both), box tests by gradation."""
+    grads = rows.get("gradation", pd.Series("", index=rows.index)).fillna("").astype(str)
+    both = grads.nunique() > 1
+    out = {}
+    for r, grad in zip(rows.itertuples(index=False), grads):
+        if str(getattr(r, "test", "")) == "box":
+            out[str(r.label)] = f"box test, {grad}" if grad else "box test"
+            continue
+        mu = pd.to_numeric(getattr(r, "friction_ps", math.nan), errors="coerce")
+        name = f"tan φμ = {mu:g}" if math.isfinite(mu) else "interface"
+        out[str(r.label)] = f"{name}, {grad}" if both and grad else name
+    return out
 
 
 def _curves(store, rows: pd.DataFrame) -> dict[str, pd.DataFrame]:
@@ -337,32 +356,46 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle", compare(lab_df, model_for),
                               ["δ = atan(tan δ); predicted tan δ = E·tan φ."]))
     table_entries = []
-    for t in tables:
+    for i, t in enumerate(tables):
         paths = T.write_table(t, tdir, prov)
         res.files += paths
         table_entries.append({"title": t.title, "files": [p.relative_to(out).as_posix() for p in paths],
                               "inline": t.name.startswith(("table_", "correlations", "lab_", "ensembles")),
-                              "html": _html_table(t.df)})
+                              "html": html_table(t.df, t.notes), "anchor": f"table-{i}"})
+    res.files.append(T.write_preview(tables, tdir))
 
     # ---- figures
     figs: list[tuple[str, list[Path]]] = []
-    add = lambda title, paths: figs.append((title, paths))
+    not_drawn: list[tuple[str, str]] = []        # (title, why): a figure with nothing to draw is left out
+
+    def add(title, paths, why=""):
+        if paths:
+            figs.append((title, paths))
+        else:
+            not_drawn.append((title, why or "nothing to draw"))
+
+    corr_why = lambda keys: F.empty_reason(points, keys)
     add("Fig. 6.3: strength vs θn and θr at the surface (a, b) and in the sampling region (c, d)",
         F.correlation_figure(points, fits, ["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"], "fig6_3", fdir,
-                             "Fig. 6.3: peak stress ratio vs principal directions θn, θr"))
-    add("Fig. 6.5: stress ratio and E vs Rnc(D50)", F.figure_6_5(points, fdir))
+                             "Fig. 6.3: peak stress ratio vs principal directions θn, θr"),
+        corr_why(["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"]))
+    add("Fig. 6.5: stress ratio and E vs Rnc(D50)", F.figure_6_5(points, fdir), F.rnc_reason(points))
     d50 = float(pd.to_numeric(summaries.get("d50", pd.Series([0.7e-3])), errors="coerce").dropna().median()) \
         if len(summaries) else 0.7e-3
     add("Fig. 6.6: polar distributions of centroid-trace normals", F.figure_6_6(_profiles_for_polar(campaign, points),
-                                                                               d50 if math.isfinite(d50) else 0.7e-3, fdir))
+                                                                               d50 if math.isfinite(d50) else 0.7e-3, fdir),
+        "no surface profile (the campaign file was not given, or it has only flat surfaces)")
     add("Fig. 6.7: peak stress ratio vs θa, both filters",
-        F.correlation_figure(points, fits, ["fig6_7a", "fig6_7b"], "fig6_7", fdir, "Fig. 6.7: peak stress ratio vs θa"))
+        F.correlation_figure(points, fits, ["fig6_7a", "fig6_7b"], "fig6_7", fdir, "Fig. 6.7: peak stress ratio vs θa"),
+        corr_why(["fig6_7a", "fig6_7b"]))
     add("Fig. 6.8: θr vs θa per friction", F.correlation_figure(points, fits, ["fig6_8"], "fig6_8", fdir,
-                                                                "Fig. 6.8: θr vs θa (> 92°)"))
+                                                                "Fig. 6.8: θr vs θa (> 92°)"), corr_why(["fig6_8"]))
     add("Fig. 6.9: θr/θa vs θa for flat-spaced surfaces", F.correlation_figure(points, fits, ["fig6_9"], "fig6_9", fdir,
-                                                                               "Fig. 6.9: flat-spaced surfaces"))
+                                                                               "Fig. 6.9: flat-spaced surfaces"),
+        corr_why(["fig6_9"]))
     add("Fig. 6.10a: efficiency vs θr", F.correlation_figure(points, fits, ["fig6_10a"], "fig6_10a", fdir,
-                                                             "Fig. 6.10a: failure criterion E(θr)"))
+                                                             "Fig. 6.10a: failure criterion E(θr)"),
+        corr_why(["fig6_10a"]))
     if checks is not None:
         add("The criterion against every simulated case: δ predicted vs measured", F.criterion_check_figure(checks, fdir))
     if lab_df is not None:
@@ -376,8 +409,10 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
             curves = _curves(store, g.sort_values("label"))
             if curves:
                 add(f"Stress ratio vs shear displacement, {grp}",
-                    F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ({len(curves)} cases)",
-                                    f"curves_{T._safe(grp)}", fdir))
+                    F.stress_curves(curves, f"Stress ratio vs shear displacement: {grp} ("
+                                    + (f"{len(curves)} runs" if len(curves) == len(g) else
+                                       f"the first {len(curves)} of {len(g)} runs by label") + ")",
+                                    f"curves_{T._safe(grp)}", fdir, curve_panels(g)))
         add_net = _networks(store, runs, fdir, res, campaign)
         figs += add_net
     for _, paths in figs:
@@ -389,12 +424,14 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     from interphase.report.html import render_page
 
     fig_entries = [{"title": t, "png": p[0].relative_to(out).as_posix(),
-                    "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None} for t, p in figs]
+                    "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None, "anchor": f"fig-{i}",
+                    "width": _shown_width(p[0])} for i, (t, p) in enumerate(figs)]
+    res.not_drawn = not_drawn
     for e in table_entries:
         e["html"] = Markup(e["html"])
     page = render_page(out / "index.html", title=title or f"Report: {campaign.name if campaign else 'campaign'}",
                        provenance=prov, n_cases=len(runs), n_box=n_box, warnings=res.warnings,
-                       tables=table_entries, figures=fig_entries)
+                       tables=table_entries, figures=fig_entries, not_drawn=not_drawn)
     res.files.append(page)
     return res
 
@@ -455,8 +492,19 @@ def build_animations(campaign_path: str | Path, keys, out: str | Path | None = N
     return paths
 
 
-def _html_table(df: pd.DataFrame) -> str:
-    return df.to_html(index=False, na_rep="–", float_format=lambda v: f"{v:.4g}", border=0, escape=True)
+#: CSS pixels per inch of figure on the page: a figure keeps its drawn proportions to the text (a one-panel
+#: figure is not blown up to the page's width; max-width still shrinks a wide one to fit)
+PAGE_PX_PER_INCH = 120
+
+
+def _shown_width(png: Path) -> int:
+    """The width [CSS px] a figure's PNG is shown at: its size in inches (DPI from the file, else
+    figures.DPI) × PAGE_PX_PER_INCH."""
+    from PIL import Image
+
+    with Image.open(png) as im:
+        dpi = float((im.info.get("dpi") or (F.DPI,))[0]) or F.DPI
+        return int(round(im.size[0] / dpi * PAGE_PX_PER_INCH))
 
 
 def _clean(d: dict) -> dict:

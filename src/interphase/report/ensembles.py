@@ -1,6 +1,11 @@
 """The report's seed-ensemble table: each physical case's tan δ, its paired box tests' tan φ and E,
 at the peak and at the critical state, each with its 95 % interval (analysis.ensemble).
 
+Intervals respect their quantity (analysis.ensemble.seed_interval): tan δ and tan φ on the log scale
+(never below 0), E by `ratio_interval` (log scale too), θr (ψ, degrees from vertical) a t interval
+clipped to [−90°, 90°]; a side with fewer than MIN_SEEDS (3) seeds has no interval, and the note
+column says so.
+
 A physical case is a campaign group's case label without its seed (`…-s3`); its box tests are every
 box test of the soil its seeds are paired with (`box_pools`): the pair_id rows, and the soil tests
 that `[pairs] seeds` ran on further seeds. Curves come from each finished case's series.parquet (shear_disp,
@@ -9,13 +14,14 @@ stress_ratio: the window ratio of an interface test, the shear plane's of a box 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.ensemble import (ensemble_efficiency, ensemble_strength, physical_case, seed_peak_states,
-                                          t_interval)
+from interphase.analysis.ensemble import (MIN_SEEDS, ensemble_efficiency, ensemble_strength, physical_case,
+                                          seed_peak_states, values_interval)
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_delta_cs",
@@ -47,11 +53,12 @@ def box_pools(summaries: pd.DataFrame) -> dict[str, tuple[str, ...]]:
     return {cid: pools[k] for cid, k in zip(ids, key)}
 
 
-def _mean_interval(values) -> tuple[float, float, float]:
+def _mean_interval(values, quantity: str) -> tuple[float, float, float]:
+    """Mean of the finite values and its interval (analysis.ensemble.values_interval)."""
     v = np.asarray([x for x in values if x is not None and math.isfinite(x)], float)
     if v.size == 0:
         return math.nan, math.nan, math.nan
-    return (float(v.mean()), *t_interval(v))
+    return (float(v.mean()), *values_interval(v, quantity))
 
 
 def _why_high(e, rows: pd.DataFrame, e_note: float) -> str:
@@ -98,14 +105,17 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
                            if math.isfinite(v)})
         a = [c for c in (curve(cid) for cid in ids) if c is not None]
         b = [c for c in (curve(cid) for cid in box_ids) if c is not None]
-        sa, sb = ensemble_strength(a, window), ensemble_strength(b, window)
+        sa, sb = ensemble_strength(a, window, quantity="tan_delta"), ensemble_strength(b, window, quantity="tan_phi")
         e = ensemble_efficiency(a, b, window)
-        th = _mean_interval(pd.to_numeric(g.get("theta_r_surface_deg"), errors="coerce"))
+        if len(a) < MIN_SEEDS or len(b) < MIN_SEEDS:      # E's interval needs as many seeds as its sides'
+            e = dataclasses.replace(e, peak_lo=math.nan, peak_hi=math.nan, critical_lo=math.nan,
+                                    critical_hi=math.nan)
+        th = _mean_interval(pd.to_numeric(g.get("theta_r_surface_deg"), errors="coerce"), "theta_r_surface_deg")
         notes = []
         if not b:
             notes.append("no finished box test: E undefined")
-        if len(a) < 3 or len(b) < 3:
-            notes.append("fewer than 3 seeds: wide or no interval")
+        if len(a) < MIN_SEEDS or len(b) < MIN_SEEDS:
+            notes.append(f"fewer than {MIN_SEEDS} seeds ({len(a)} interface, {len(b)} box): no interval")
         if math.isfinite(e.peak) and e.peak > e_note:
             notes.append(_why_high(e, g, e_note))
         out.append(dict(group=group, case=name, seeds=sa.n_seeds, box_seeds=sb.n_seeds,

@@ -7,6 +7,12 @@ none for a case with one seed. Colour = particle–surface friction tan φμ, ma
 mono-disperse, filled = poly-disperse. Fits are drawn over their fitted x range with their bootstrap
 band (the seed bootstrap when the points have seeds); a correlation without a fit draws its points
 and says why ("no fit: n = 3 < 7"). Angles are ψ, degrees from vertical, unless an axis says ccw.
+
+For a paper: each figure is a PDF and a 300 dpi PNG; every legend lies inside the image (the figure
+key is laid out in as many columns as fit the figure's width, and the panels leave it room), each key
+entry looks different (colours as swatches, groups as markers, gradation as hollow/filled boxes); the
+axes hold every point with its whole 95 % bar. A figure with nothing to draw is not drawn: its
+function returns no paths and `empty_reason` says why (the report page prints it).
 """
 
 from __future__ import annotations
@@ -24,11 +30,27 @@ import pandas as pd  # noqa: E402
 from interphase.analysis.correlations import SEED_INVARIANT, SPECS, subset  # noqa: E402
 
 MARKERS = "osD^vP*Xph<>"
-DPI = 110
+DPI = 300              # PNG resolution: a journal's for line art with points
+KEY_FONTSIZE = 7
+
+
+def legend_overflow(fig) -> list[str]:
+    """The legends of `fig` that reach outside its image (by more than half a pixel), as text; [] when
+    all lie inside. Draws the figure to measure them."""
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    box = fig.bbox
+    legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    out = []
+    for leg in legends:
+        bb = leg.get_window_extent(r)
+        if bb.x0 < box.x0 - 0.5 or bb.y0 < box.y0 - 0.5 or bb.x1 > box.x1 + 0.5 or bb.y1 > box.y1 + 0.5:
+            out.append(f"legend {[t.get_text() for t in leg.get_texts()][:3]}… at {bb.bounds} outside {box.bounds}")
+    return out
 
 
 def save(fig, folder: Path, stem: str) -> list[Path]:
-    """PNG and PDF of `fig`, then close it."""
+    """PNG (DPI) and PDF of `fig`, then close it."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = [folder / f"{stem}.png", folder / f"{stem}.pdf"]
     fig.savefig(paths[0], dpi=DPI)
@@ -81,29 +103,26 @@ def scatter(ax, points: pd.DataFrame, x: str, y: str, colour, marker, legend: bo
     return n
 
 
-def fit_view(ax, points: pd.DataFrame, x: str, y: str, reach: float = 0.5) -> None:
-    """Axis limits that show every point and each error bar up to `reach` × the points' span beyond
-    them: a seed interval of two seeds (t = 12.7) can be ten times the spread of the points, and
-    would otherwise shrink them to a line. Longer bars run off the edge."""
+def fit_view(ax, points: pd.DataFrame, x: str, y: str) -> None:
+    """Axis limits that hold every point and the whole of each 95 % bar (`<col>_lo`, `<col>_hi`),
+    padded by 5 %. The intervals respect their quantity's range and exist from 3 seeds on
+    (analysis.ensemble.seed_interval), so no bar is long enough to shrink the points to a line."""
     for col, setter in ((x, ax.set_xlim), (y, ax.set_ylim)):
         if col not in points or points.empty:
             continue
         v = pd.to_numeric(points[col], errors="coerce").to_numpy(float)
-        v = v[np.isfinite(v)]
-        if not v.size:
+        ok = np.isfinite(v)
+        if not ok.any():
             continue
-        lo, hi = float(v.min()), float(v.max())
+        ends = [v[ok]]
+        if col not in SEED_INVARIANT:
+            ends += [pd.to_numeric(points[col + e], errors="coerce").to_numpy(float)[ok]
+                     for e in ("_lo", "_hi") if col + e in points]
+        allv = np.concatenate(ends)
+        allv = allv[np.isfinite(allv)]
+        lo, hi = float(allv.min()), float(allv.max())
         span = max(hi - lo, 1e-9 * max(abs(lo), abs(hi), 1.0))
-        for end, f in (("_lo", min), ("_hi", max)):
-            if col + end in points:
-                e = pd.to_numeric(points[col + end], errors="coerce").to_numpy(float)
-                e = e[np.isfinite(e)]
-                if e.size:
-                    bound = lo - reach * span if end == "_lo" else hi + reach * span
-                    edge = f(float(f(e)), lo if end == "_lo" else hi)
-                    lo, hi = (max(edge, bound), hi) if end == "_lo" else (lo, min(edge, bound))
-        pad = 0.05 * max(hi - lo, span)
-        setter(lo - pad, hi + pad)
+        setter(lo - 0.05 * span, hi + 0.05 * span)
 
 
 def draw_fits(ax, fits, colour) -> None:
@@ -144,26 +163,76 @@ def correlation_panel(ax, points, spec_key: str, fit_results, colour, marker, le
     ax.set_xlabel(spec.x_label)
     ax.set_ylabel(spec.y_label)
     seeds = pd.to_numeric(pts.get("seeds", pd.Series(dtype=float)), errors="coerce")
-    what = (f"n = {n} physical cases, seed means ± 95 %" if len(seeds) and (seeds > 1).any() else f"n = {n}")
+    bars = any(f"{c}_lo" in pts and np.isfinite(pd.to_numeric(pts[f"{c}_lo"], errors="coerce")).any()
+               for c in (spec.x, spec.y) if c not in SEED_INVARIANT)
+    what = (f"n = {n} physical cases, seed means ± 95 %" if bars else
+            f"n = {n} physical cases, seed means; no interval below 3 seeds" if len(seeds) and (seeds > 1).any()
+            else f"n = {n}")
     ax.set_title(f"Fig. {spec.figure}: {spec.title}\n({what})", fontsize=9)
     ax.grid(alpha=0.3)
 
 
-def _legend(fig, axes, points=None) -> None:
-    """One key for the whole figure: colour = friction, marker = group, filled = poly-disperse."""
+def key_handles(points) -> list:
+    """The figure key: colour = friction (swatches), marker = group (grey, hollow), gradation = hollow
+    or filled (boxes; only when the points have both), each entry distinct from every other."""
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     if points is None or points.empty:
-        return
+        return []
     colour, marker = _styles(points)
-    h = [Line2D([], [], ls="", marker="o", color=c, label=f"tan φμ = {mu:g}") for mu, c in colour.items()]
+    h = [Patch(facecolor=c, edgecolor=c, label=f"tan φμ = {mu:g}") for mu, c in colour.items()]
     h += [Line2D([], [], ls="", marker=m, color="0.35", mfc="none", label=str(g)) for g, m in marker.items()]
-    h += [Line2D([], [], ls="", marker="o", color="0.35", mfc="none", label="mono-disperse"),
-          Line2D([], [], ls="", marker="o", color="0.35", label="poly-disperse")]
-    fig.legend(handles=h, loc="lower center", ncol=min(6, len(h)), fontsize=7, frameon=False)
+    grads = set(points.get("gradation", pd.Series(dtype=str)).dropna().astype(str))
+    if {"mono", "poly"} <= grads:
+        h += [Patch(facecolor="none", edgecolor="0.35", label="hollow: mono-disperse"),
+              Patch(facecolor="0.35", edgecolor="0.35", label="filled: poly-disperse")]
+    return h
+
+
+def place_key(fig, handles, top: float = 0.96) -> None:
+    """The key below the panels in as many columns as fit the figure's width, and the panels laid
+    out (tight_layout) above it: nothing of it outside the image."""
+    if not handles:
+        fig.tight_layout(rect=(0, 0, 1, top))
+        return
+    r = fig.canvas.get_renderer()
+    for ncol in range(min(len(handles), 8), 0, -1):
+        leg = fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.005), ncol=ncol,
+                         fontsize=KEY_FONTSIZE, frameon=False, handlelength=1.2, columnspacing=1.2)
+        bb = leg.get_window_extent(r)
+        if bb.width <= 0.98 * fig.bbox.width or ncol == 1:
+            break
+        leg.remove()
+    fig.tight_layout(rect=(0, min(0.6, (bb.height + 6) / fig.bbox.height), 1, top))
+
+
+def _legend(fig, axes, points=None) -> None:
+    """One key for the whole figure (`key_handles`), placed by `place_key`."""
+    place_key(fig, key_handles(points))
+
+
+def empty_reason(points: pd.DataFrame, keys) -> str:
+    """Why the correlation panels `keys` would be empty ("" when any has a point to draw)."""
+    for key in keys:
+        spec = SPECS[key]
+        pts = subset(points, spec) if len(points) else points
+        if spec.x in pts and spec.y in pts:
+            xs, ys = (pd.to_numeric(pts[c], errors="coerce") for c in (spec.x, spec.y))
+            if (np.isfinite(xs) & np.isfinite(ys)).any():
+                return ""
+    specs = [SPECS[k] for k in keys]
+    where = {s.subset for s in specs if s.subset} or {""}
+    sub = f" among the {'/'.join(sorted(where)).replace('_', '-')} surfaces" if where != {""} else ""
+    return (f"no physical case{sub} has both " + "; ".join(f"{s.x_label} and {s.y_label}" for s in specs)
+            + " (n = 0)")
 
 
 def correlation_figure(points, fit_results, keys, stem: str, folder: Path, suptitle: str) -> list[Path]:
+    """The correlation panels `keys` (SPECS) with the figure key; no paths (nothing drawn) when every
+    panel would be empty (`empty_reason`)."""
+    if empty_reason(points, keys):
+        return []
     colour, marker = _styles(points)
     ncol = 2 if len(keys) > 1 else 1
     nrow = math.ceil(len(keys) / ncol)
@@ -176,12 +245,14 @@ def correlation_figure(points, fit_results, keys, stem: str, folder: Path, supti
         ax.set_visible(False)
     fig.suptitle(suptitle, fontsize=11)
     _legend(fig, axes, points)
-    fig.tight_layout(rect=(0, 0.1 if nrow == 1 else 0.06, 1, 0.96))
     return save(fig, folder, stem)
 
 
 def figure_6_5(points, folder: Path) -> list[Path]:
-    """Peak stress ratio and E against Rnc(D50) (no fit: the study shows Rnc does not correlate uniquely)."""
+    """Peak stress ratio and E against Rnc(D50) (no fit: the study shows Rnc does not correlate uniquely);
+    nothing drawn (no paths) without a point with Rnc and tan δ."""
+    if rnc_reason(points):
+        return []
     colour, marker = _styles(points)
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.4))
     for ax, (y, lab) in zip(axes, (("peak_stress_ratio", "peak stress ratio tan δ [-]"),
@@ -196,13 +267,25 @@ def figure_6_5(points, folder: Path) -> list[Path]:
             ax.text(0.5, 0.5, f"no points with both Rnc and {y}", transform=ax.transAxes, ha="center", color="C3")
     fig.suptitle("Fig. 6.5: strength vs normalised roughness Rnc(D50)")
     _legend(fig, axes, points)
-    fig.tight_layout(rect=(0, 0.12, 1, 0.95))
     return save(fig, folder, "fig6_5")
+
+
+def rnc_reason(points: pd.DataFrame) -> str:
+    """Why Fig. 6.5 would be empty ("" when it has a point)."""
+    if "rnc" in points and "peak_stress_ratio" in points:
+        both = np.isfinite(pd.to_numeric(points["rnc"], errors="coerce")) & \
+            np.isfinite(pd.to_numeric(points["peak_stress_ratio"], errors="coerce"))
+        if both.any():
+            return ""
+    return "no physical case has both Rnc(D50) and a peak stress ratio (n = 0)"
 
 
 def figure_6_6(profiles: list[tuple[str, object]], d50: float, folder: Path, bins: int = 72) -> list[Path]:
     """Polar (upper half-plane) length-weighted distributions of centroid-trace normals of selected
-    profiles, θ ccw from +x; kept side (> 92°) shaded; θa (> 92°) as an arrow."""
+    profiles, θ ccw from +x; kept side (> 92°) shaded; θa (> 92°) as an arrow. Nothing drawn (no
+    paths) without a profile."""
+    if not profiles:
+        return []
     from interphase.surface.normals import keep_mask, segment_normals, theta_a
     from interphase.surface.trace import centroid_trace
 
@@ -226,31 +309,74 @@ def figure_6_6(profiles: list[tuple[str, object]], d50: float, folder: Path, bin
         ax.set_yticklabels([])
         ta = f"θa = {res.theta_a_deg:.1f}°" if res.dilative else "θa undefined (non-dilative)"
         ax.set_title(f"({chr(97 + i)}) {label}\n{ta}", fontsize=8)
-    if not profiles:
-        fig.text(0.5, 0.5, "no surface profiles in this campaign", ha="center", color="C3")
     fig.suptitle(f"Fig. 6.6: centroid-trace normal distributions (D50 = {d50 * 1e3:g} mm; θ ccw from +x)", fontsize=10)
     fig.tight_layout()
     return save(fig, folder, "fig6_6")
 
 
-def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder: Path) -> list[Path]:
-    """Stress ratio vs shear displacement, one curve per case (smoothed where the series has it)."""
-    fig, ax = plt.subplots(figsize=(8, 5))
-    for i, (label, s) in enumerate(sorted(curves.items())):
-        if "stress_ratio_smooth" in s:      # raw faint, the peak-finding moving average on top
-            ax.plot(s["shear_disp"] * 1e3, s["stress_ratio"], lw=0.5, alpha=0.3, color=f"C{i % 10}")
-        y = s["stress_ratio_smooth"] if "stress_ratio_smooth" in s else s["stress_ratio"]
-        ax.plot(s["shear_disp"] * 1e3, y, lw=1.2, color=f"C{i % 10}", label=label)
-    ax.set_xlabel("shear displacement [mm]")
-    ax.set_ylabel("stress ratio [-] (surface ΣFx/Σ−Fz; box τ/σ)")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
+CURVE_PANEL_COLS = 2      # curve panels per row
+
+
+def short_names(names) -> dict[str, str]:
+    """{name: the name without the `-`-separated words every name shares} ("quick-rt0.5-mu0.2" and
+    "quick-rt1-mu0.2" → "rt0.5", "rt1"); a name left empty keeps its full form."""
+    names = list(names)
+    words = [n.split("-") for n in names]
+    common = set.intersection(*(set(w) for w in words)) if len(names) > 1 else set()
+    return {n: "-".join(x for x in w if x not in common) or n for n, w in zip(names, words)}
+
+
+def stress_curves(curves: dict[str, pd.DataFrame], title: str, stem: str, folder: Path,
+                  panels: dict[str, str] | None = None) -> list[Path]:
+    """Stress ratio [-] vs shear displacement [mm], faceted: one panel per `panels[label]` (e.g.
+    "tan φμ = 0.2"; one panel without `panels`), one colour per physical case (a label without its
+    `-sN`), its seeds in that colour; each panel's legend, right of it and inside the image, names
+    its physical cases by what tells them apart (`short_names`) and their seed counts. No paths
+    (nothing drawn) without a curve."""
+    from interphase.analysis.ensemble import physical_case
+
     if not curves:
-        ax.text(0.5, 0.5, "no stored series for these cases", transform=ax.transAxes, ha="center", color="C3")
-    elif len(curves) <= 12:
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        return []
+    panels = panels or {}
+    by_panel: dict[str, dict[str, list[str]]] = {}
+    for label in sorted(curves):
+        by_panel.setdefault(str(panels.get(label, "")), {}).setdefault(physical_case(label), []).append(label)
+    short = short_names({c for cases in by_panel.values() for c in cases})
+    names = sorted(by_panel)
+    ncol = min(CURVE_PANEL_COLS, len(names))
+    nrow = math.ceil(len(names) / ncol)
+    most = max(len(c) for c in by_panel.values())
+    key_cols = 1 if most <= 14 else 2
+    key_width = 0.09 * max(len(v) for v in short.values()) + 0.9
+    fig, axes = plt.subplots(nrow, ncol, figsize=(ncol * (4.6 + key_cols * key_width), nrow * max(3.4, 0.2 * most / key_cols + 1.2)),
+                             squeeze=False, layout="constrained")
+    for ax, name in zip(axes.ravel(), names):
+        cases = by_panel[name]
+        cmap = plt.get_cmap("tab10" if len(cases) <= 10 else "tab20" if len(cases) <= 20 else "viridis")
+        for i, (case, labels) in enumerate(sorted(cases.items(), key=lambda kv: _natural(short[kv[0]]))):
+            c = cmap(i % 20 if len(cases) <= 20 else i / max(len(cases) - 1, 1))
+            for j, label in enumerate(labels):
+                s = curves[label]
+                y = s["stress_ratio_smooth"] if "stress_ratio_smooth" in s else s["stress_ratio"]
+                ax.plot(s["shear_disp"] * 1e3, y, lw=0.9, color=c, alpha=0.85,
+                        label=f"{short[case]} ({len(labels)} seed{'s' if len(labels) > 1 else ''})" if j == 0 else None)
+        ax.set_xlabel("shear displacement [mm]")
+        ax.set_ylabel("stress ratio [-]")
+        ax.set_title(name or title, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=key_cols, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False,
+                  handlelength=1.5, columnspacing=1.0)
+    for ax in axes.ravel()[len(names):]:
+        ax.set_visible(False)
+    fig.suptitle(f"{title}\n(surface ΣFx/Σ−Fz; box τ/σ; one colour per physical case, its seeds alike)", fontsize=10)
     return save(fig, folder, stem)
+
+
+def _natural(text: str):
+    """Sort key that orders rt0.5 before rt1 before rt10."""
+    import re
+
+    return [float(t) if re.fullmatch(r"\d+(\.\d+)?", t) else t for t in re.split(r"(\d+(?:\.\d+)?)", text)]
 
 
 def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[Path]:
@@ -273,8 +399,7 @@ def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[
     ax.set_title("Fig. 6.10b: laboratory data (stars) with the simulations", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
-    _legend(fig, ax, points)
-    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    place_key(fig, key_handles(points), top=1.0)
     return save(fig, folder, "fig6_10b_lab")
 
 

@@ -78,3 +78,69 @@ def synthetic_summaries(n: int = 200, seed: int = 0, noise_deg: float = 1.0, noi
                         "test": "box", "gradation": list(box_ids), "d50": 0.7e-3, "friction_ps": math.nan,
                         "peak_stress_ratio": TAN_PHI, "seed": 1})
     return pd.concat([df, box], ignore_index=True)
+
+
+def _synthetic_curve(peak: float, distance: float, rng, points: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """A stress-ratio curve [-] over shear displacement [m]: a rise to `peak` at 0.3 of `distance`, a
+    15 % softening after it, and ±2 % noise."""
+    s = np.linspace(0.0, distance, points)
+    sp = 0.3 * distance
+    r = peak * np.tanh(2.5 * s / sp) * (1.0 - 0.15 * np.clip((s - sp) / (distance - sp), 0.0, 1.0))
+    return s, r * (1.0 + rng.normal(0.0, 0.02, points))
+
+
+def synthetic_restore(campaign_path, folder, seed: int = 0, scatter_deg: float = 2.0,
+                      scatter_e: float = 0.03) -> tuple:
+    """summaries.csv and curves.parquet in `folder` for every case the campaign file plans (its ids,
+    labels and recipe), as `campaign report` writes them: `campaign run FILE --restore
+    folder/summaries.csv` then brings the campaign back without an engine (for the report's tests
+    and screenshots). NOT simulation results: θa is the surface's own (surface.normals.theta_a),
+    θr and E follow the truth above with a per-seed scatter (`scatter_deg` [°], `scatter_e` [-]),
+    tan φ = TAN_PHI ± 3 % per box seed. Returns the two paths."""
+    from pathlib import Path
+
+    from interphase.campaign.plan import plan
+    from interphase.campaign.schema import load_campaign
+    from interphase.errors import InputError
+    from interphase.surface.normals import theta_a
+    from interphase.surface.profiles import from_spec
+
+    campaign = load_campaign(campaign_path)
+    rng = np.random.default_rng(seed)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    rows, curves, surfaces = [], [], {}
+    for p in plan(campaign):
+        c = p.case
+        row = {"case_id": p.case_id, "label": p.label, "group": p.group, "test": p.params["test"],
+               "pair_id": p.pair_id, "friction_ps": c.friction_ps, "gradation": p.params["gradation"],
+               "seed": c.seed, "recipe_id": p.recipe_id, "d50": c.d50, "engine_version": "synthetic"}
+        if p.params["test"] == "box":
+            peak = TAN_PHI * (1.0 + rng.normal(0.0, 0.03))
+        else:
+            key = (c.profile.kind, c.profile.params, c.profile.path)
+            if key not in surfaces:
+                try:
+                    prof = from_spec(c.profile, c.d50, min(c.box_length_d50, 40.0) * c.d50)
+                    res92, res90 = theta_a(prof, c.d50, 92), theta_a(prof, c.d50, 90)
+                    surfaces[key] = (res92.theta_a_deg if res92.dilative else 0.0,
+                                     res90.theta_a_deg if res90.dilative else 0.0)
+                except InputError:
+                    surfaces[key] = (0.0, 0.0)
+            ta92, ta90 = surfaces[key]
+            tr = float(true_theta_r(ta92, c.friction_ps)) + rng.normal(0.0, scatter_deg)
+            peak = (float(true_efficiency(tr)) + rng.normal(0.0, scatter_e)) * TAN_PHI
+            row |= {"theta_a_deg_92": ta92, "theta_a_deg_90": ta90, "rnc": ta92 / 80.0, "rn": ta92 / 60.0,
+                    "theta_r_surface_deg": tr, "theta_n_surface_deg": 0.9 * tr + rng.normal(0.0, 1.0),
+                    "theta_r_region_deg": 0.8 * tr + rng.normal(0.0, 1.0), "stress_ratio_region": 0.9 * peak,
+                    "lee_share_surface": float(np.clip(0.3 + rng.normal(0.0, 0.05), 0.0, 1.0))}
+        x, r = _synthetic_curve(peak, c.shear_distance, rng)
+        row |= {"peak_stress_ratio": float(r.max()), "shear_disp_at_peak": float(x[int(np.argmax(r))]),
+                "residual_stress_ratio": float(r[-40:].mean())}
+        rows.append(row)
+        curves.append(pd.DataFrame({"case_id": p.case_id, "shear_disp": x.astype(np.float32),
+                                    "stress_ratio": r.astype(np.float32)}))
+    summaries, curve_path = folder / "summaries.csv", folder / "curves.parquet"
+    pd.DataFrame(rows).to_csv(summaries, index=False, float_format="%.6g")
+    pd.concat(curves, ignore_index=True).to_parquet(curve_path, index=False)
+    return summaries, curve_path

@@ -2,12 +2,18 @@
 
 Headers carry their units ("θr, surface [°]"); angles are ψ, degrees from vertical, unless a header
 says ccw. The LaTeX fragment is one `tabular` (no float, so a paper \\input's it inside its own
-table environment) ending with a provenance note row: package, engine and template versions, date.
+table environment) ending with note rows (wrapped at \\linewidth) and a provenance row: package,
+engine and template versions, date. It is plain ASCII: Greek letters, °, ±, ≥ … become math-mode
+macros ($\\delta$, $^\\circ$, $\\pm$, $\\geq$), numbers are set in math mode ($-0.39$,
+$1.2\\times10^{-5}$), so it needs only booktabs (`\\usepackage{booktabs}`). tables_preview.tex
+\\input's every fragment into one document (`pdflatex tables_preview.tex` shows them).
 """
 
 from __future__ import annotations
 
 import math
+import re
+import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,8 +25,9 @@ import pandas as pd
 class Table:
     name: str                  # file stem, e.g. "table_6_1_inputs"
     title: str
-    df: pd.DataFrame
+    df: pd.DataFrame           # as printed (Markdown, LaTeX, the page)
     notes: list[str] = field(default_factory=list)
+    csv: pd.DataFrame | None = None    # the CSV's columns when they differ from df's (raw numbers)
 
 
 # ---- formatting ------------------------------------------------------------------------------------
@@ -39,17 +46,83 @@ def _fmt(v, digits: int = 4) -> str:
 
 
 _TEX_ESC = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_",
-            "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}", "^": r"\^{}"}
-_TEX_UNI = {"θ": r"$\theta$", "φ": r"$\phi$", "μ": r"$\mu$", "δ": r"$\delta$", "ψ": r"$\psi$", "°": r"$^\circ$",
-            "≥": r"$\geq$", "≤": r"$\leq$", "–": "--", "—": "---", "·": r"$\cdot$", "₊": r"$_+$", "−": "-",
-            "²": r"$^2$", "₅₀": r"$_{50}$", "≈": r"$\approx$", "×": r"$\times$", "²": r"$^2$"}
+            "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}", "^": r"\^{}", "<": r"$<$", ">": r"$>$",
+            "|": r"$|$"}
+#: non-ASCII characters the tables use, as (LaTeX, is math); sequences first (φμ is φ with subscript μ)
+_TEX_SEQ = {"φμ": (r"\phi_\mu", True), "₅₀": (r"_{50}", True), "D50": (r"D_{50}", True), "θa": (r"\theta_a", True),
+            "θr": (r"\theta_r", True), "θn": (r"\theta_n", True), "σxz": (r"\sigma_{xz}", True),
+            "σzz": (r"\sigma_{zz}", True), "μs": (r"\mu_s", True), "ψF": (r"\psi_F", True)}
+_TEX_UNI = {"θ": r"\theta", "φ": r"\phi", "μ": r"\mu", "δ": r"\delta", "ψ": r"\psi", "σ": r"\sigma", "τ": r"\tau",
+            "β": r"\beta", "Σ": r"\Sigma", "±": r"\pm", "°": r"^\circ", "≥": r"\geq", "≤": r"\leq", "·": r"\cdot",
+            "₊": r"_+", "−": "-", "²": "^2", "≈": r"\approx", "×": r"\times", "→": r"\rightarrow", "∝": r"\propto",
+            "√": r"\surd", "ᵀ": r"^{\mathrm{T}}", "₀": "_0", "₅": "_5", "§": r"\S"}
+_TEX_TEXT = {"–": "--", "—": "---", "…": r"\ldots{}", "’": "'", "‘": "`", "“": "``", "”": "''",
+             "\u00a0": "~"}
+
+
+def _tex_pieces(text: str):
+    """(LaTeX, is math) for each character or known sequence of `text`."""
+    i = 0
+    while i < len(text):
+        seq = next((k for k in _TEX_SEQ if text.startswith(k, i)), None)
+        if seq:
+            yield _TEX_SEQ[seq]
+            i += len(seq)
+            continue
+        ch = text[i]
+        i += 1
+        if ch in _TEX_UNI:
+            yield _TEX_UNI[ch], True
+        elif ch == "-" and i < len(text) and text[i].isdigit() and (i < 2 or not text[i - 2].isalnum()):
+            yield "-", True                               # a minus sign, not a hyphen
+        elif ch in _TEX_TEXT:
+            yield _TEX_TEXT[ch], False
+        elif ch in _TEX_ESC:
+            yield _TEX_ESC[ch], False
+        elif ord(ch) < 128:
+            yield ch, False
+        else:      # nothing the report writes; an ASCII stand-in keeps the fragment compiling
+            name = unicodedata.normalize("NFKD", ch).encode("ascii", "ignore").decode() or "?"
+            yield name, False
 
 
 def tex_escape(text: str) -> str:
-    out = "".join(_TEX_ESC.get(ch, ch) for ch in str(text))
-    for k, v in _TEX_UNI.items():
-        out = out.replace(k, v)
+    r"""`text` as plain-ASCII LaTeX: specials escaped, Greek letters and symbols as math-mode macros,
+    consecutive math pieces joined in one $…$ (so "φμ" is $\phi_\mu$, never $$)."""
+    out, math_run = [], []
+    for tex, is_math in _tex_pieces(str(text)):
+        if is_math:
+            math_run.append(tex)
+            continue
+        if math_run:
+            out.append("$" + _join_math(math_run) + "$")
+            math_run = []
+        out.append(tex)
+    if math_run:
+        out.append("$" + _join_math(math_run) + "$")
+    return "".join(out)
+
+
+def _join_math(pieces: list[str]) -> str:
+    out = ""
+    for p in pieces:
+        if re.search(r"\\[A-Za-z]+$", out) and p[:1].isalpha():     # \mu x, not \mux
+            out += " "
+        out += p
     return out
+
+
+_NUMBER = re.compile(r"^(-?)(\d+(?:\.\d*)?)(?:e([+-]?\d+))?$")
+
+
+def tex_number(text: str) -> str:
+    r"""A formatted number in math mode ($-0.39$, $1.2\times10^{-5}$); other text through tex_escape."""
+    m = _NUMBER.match(text)
+    if not m:
+        return tex_escape(text)
+    sign, mant, exp = m.groups()
+    body = f"{sign}{mant}" + (rf"\times10^{{{int(exp)}}}" if exp else "")
+    return f"${body}$"
 
 
 def to_markdown(table: Table, provenance: str) -> str:
@@ -65,28 +138,62 @@ def to_markdown(table: Table, provenance: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _right_aligned(col: pd.Series) -> bool:
+    """Numbers (or numbers with their interval, "0.42 [0.40, 0.44]") are set flush right."""
+    if pd.api.types.is_bool_dtype(col):
+        return False
+    if pd.api.types.is_numeric_dtype(col):
+        return True
+    cells = [str(v) for v in col if v is not None and str(v) not in ("", "–", "nan")]
+    return bool(cells) and all(re.match(r"^[-−]?\d", c) for c in cells)
+
+
 def to_latex(table: Table, provenance: str) -> str:
+    r"""One booktabs `tabular` (see the module doc): plain ASCII, notes and provenance as full-width
+    rows wrapped at \linewidth."""
     n = max(1, len(table.df.columns))
-    align = "".join("r" if pd.api.types.is_numeric_dtype(table.df[c]) and not pd.api.types.is_bool_dtype(table.df[c])
-                    else "l" for c in table.df.columns) or "l"
+    align = "".join("r" if _right_aligned(table.df[c]) else "l" for c in table.df.columns) or "l"
     lines = [f"% {tex_escape(table.title)}", f"\\begin{{tabular}}{{{align}}}", r"\toprule",
              " & ".join(tex_escape(c) for c in table.df.columns) + r" \\", r"\midrule"]
     for row in table.df.itertuples(index=False):
-        lines.append(" & ".join(tex_escape(_fmt(v)) for v in row) + r" \\")
+        lines.append(" & ".join(tex_number(_fmt(v)) for v in row) + r" \\")
     lines.append(r"\bottomrule")
     for note in [*table.notes, provenance]:
-        lines.append(f"\\multicolumn{{{n}}}{{l}}{{\\footnotesize {tex_escape(note)}}} \\\\")
+        lines.append(f"\\multicolumn{{{n}}}{{@{{}}p{{\\linewidth}}@{{}}}}{{\\footnotesize {tex_escape(note)}}} \\\\")
     lines.append(r"\end{tabular}")
     return "\n".join(lines) + "\n"
 
 
+PREVIEW = r"""%% every table of the report in one document: pdflatex tables_preview.tex
+\documentclass[10pt]{article}
+\usepackage[a3paper,landscape,margin=1.5cm]{geometry}
+\usepackage{booktabs}
+\usepackage{graphicx}
+\pagestyle{empty}
+\begin{document}
+%s
+\end{document}
+"""
+
+
+def write_preview(tables: list[Table], folder: Path) -> Path:
+    """tables_preview.tex: each fragment under its title, scaled down to the page width when wider."""
+    body = []
+    for t in tables:
+        body.append(f"\\section*{{{tex_escape(t.title)}}}\n\\noindent\\resizebox{{\\ifdim\\width>\\linewidth"
+                    f"\\linewidth\\else\\width\\fi}}{{!}}{{\\input{{{t.name}.tex}}}}\n\\clearpage")
+    path = folder / "tables_preview.tex"
+    path.write_text(PREVIEW % "\n".join(body), encoding="ascii")
+    return path
+
+
 def write_table(table: Table, folder: Path, provenance: str) -> list[Path]:
-    """Write NAME.csv, NAME.md and NAME.tex into `folder`; returns the paths."""
+    """Write NAME.csv (table.csv when given, else df), NAME.md and NAME.tex into `folder`."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = [folder / f"{table.name}.{ext}" for ext in ("csv", "md", "tex")]
-    table.df.to_csv(paths[0], index=False)
+    (table.csv if table.csv is not None else table.df).to_csv(paths[0], index=False)
     paths[1].write_text(to_markdown(table, provenance), encoding="utf-8")
-    paths[2].write_text(to_latex(table, provenance), encoding="utf-8")
+    paths[2].write_text(to_latex(table, provenance), encoding="ascii")
     return paths
 
 
@@ -171,13 +278,43 @@ def _interval_text(lo, hi) -> str:
 E_NOTE = 1.2
 
 
+INTERVAL_NOTE = ("95 % intervals in brackets, over the seeds: tan δ, tan φ and other positive ratios on the log "
+                 "scale (never below 0), E as a ratio of seed means (log scale, Welch), angles ψ a Student-t "
+                 "interval clipped to [−90°, 90°]; none with fewer than 3 seeds (docs/methods.md, Seed ensembles).")
+
+
+def _with_interval(v, lo, hi, digits: int) -> str:
+    """"0.421 [0.401, 0.441]"; the value alone without a finite interval; "–" without a value."""
+    v, lo, hi = (pd.to_numeric(x, errors="coerce") for x in (v, lo, hi))
+    if not math.isfinite(v):
+        return "–"
+    if math.isfinite(lo) and math.isfinite(hi):
+        return f"{v:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+    return f"{v:.{digits}f}"
+
+
+#: the ensembles table as printed: (header, raw column, digits)
+ENSEMBLE_SHOWN = (("tan δ peak [-]", "tan_delta", 3), ("tan δ critical [-]", "tan_delta_cs", 3),
+                  ("tan φ peak [-]", "tan_phi", 3), ("tan φ critical [-]", "tan_phi_cs", 3),
+                  ("E peak [-]", "E", 3), ("E critical [-]", "E_cs", 3), ("θr surface [°]", "theta_r_deg", 1))
+
+
 def ensembles_table(df: pd.DataFrame) -> Table:
-    """The seed-ensemble table (report.ensembles.ensemble_table) as a report table."""
+    """The seed-ensemble table (report.ensembles.ensemble_table) as a report table: each value with its
+    interval in one cell (the CSV keeps the raw columns, `_lo`/`_hi` beside each value)."""
+    shown = pd.DataFrame({"group": df["group"], "case": df["case"],
+                          "seeds (interface / box)": [f"{int(a)} / {int(b)}" for a, b in zip(df["seeds"], df["box_seeds"])]})
+    for head, col, digits in ENSEMBLE_SHOWN:
+        lo, hi = (f"{col}_lo", f"{col}_hi") if col != "theta_r_deg" else ("theta_r_lo", "theta_r_hi")
+        shown[head] = [_with_interval(v, a, b, digits) for v, a, b in zip(df[col], df[lo], df[hi])]
+    shown["θa > 92° [°]"] = [_fmt(v, 3) for v in pd.to_numeric(df["theta_a_deg_92"], errors="coerce")]
+    shown["note"] = df["note"].fillna("")
     return Table("ensembles", "Seed ensembles: tan δ, tan φ and E at the peak and the critical state, 95 % intervals",
-                 df, ["Peak: the maximum of the seed-mean curve (smoothed over 0.5 D50), interval Student t over the "
-                      "seeds' values there; critical state: mean of the last 40 % of the shear, t interval; E: "
-                      "bootstrap of the ratio of seed means (docs/methods.md, Seed ensembles). θr: mean of the "
-                      "seeds' peak-snapshot θr at the surface (ψ, degrees from vertical), t interval."])
+                 shown.reset_index(drop=True),
+                 ["Peak: the maximum of the seed-mean curve (smoothed over 0.5 D50), over the seeds' values there; "
+                  "critical state: mean of the last 40 % of the shear; E = tan δ / tan φ of the seed means; θr: mean "
+                  "of the seeds' peak-snapshot θr at the surface (ψ, degrees from vertical).", INTERVAL_NOTE],
+                 csv=df)
 
 
 def findings_tables(points: pd.DataFrame) -> list[Table]:
@@ -228,7 +365,8 @@ def results_tables(points: pd.DataFrame) -> list[Table]:
             notes.append("One row per physical case: the mean over its seeds (runs). tan δ, tan φ and E are the seed "
                          "ensemble's (peak of the seed-mean curve; E with its box tests' bootstrap interval), as in the "
                          "ensembles table, which also has the critical state; other columns: the mean of the seeds' "
-                         "values. 95 % intervals: Student t over the seeds (E: bootstrap); none for one seed.")
+                         "values.")
+            notes.append(INTERVAL_NOTE)
         e = pd.to_numeric(g.get("efficiency", pd.Series(dtype=float)), errors="coerce")
         if (e > E_NOTE).any():
             walls = "" if (g.get("device", pd.Series(dtype=str)) == "periodic").all() else (
@@ -268,13 +406,37 @@ def coefficient_table(fit_results) -> Table:
     order = ["figure", "y", "x", "model", "slice", "n", "b0", "b0 95%", "b1", "b1 95%", "b2", "b2 95%", "c",
              "c 95% (profile)", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)", "R² [-]", "note"]
     df = df.reindex(columns=[c for c in order if c in df.columns])
+    shown = _coefficients_shown(df)
     return Table("correlations", "Bilinear correlations: hinge y = b0 + b1·x + b2·(x − c)₊, plateau y = b0 + b1·min(x, c)",
-                 df, ["x, c in the x column's units (angles ψ in degrees unless ccw); n: physical cases (seed "
+                 shown, ["x, c in the x column's units (angles ψ in degrees unless ccw); n: physical cases (seed "
                       "means). Intervals 95 %: coefficients and c by the bootstrap the 'bootstrap' column names — "
                       "seed: every physical case's seeds (and its box tests') drawn with replacement, means refitted; "
                       "residual: fitted + resampled residuals (where fewer than half the cases have two seeds) — c "
                       "also by profile likelihood (F test) and, beside a seed bootstrap, by the residual bootstrap "
-                      "on the same means (docs/methods.md §7)."])
+                      "on the same means (docs/methods.md §7)."], csv=df)
+
+
+def _coefficients_shown(df: pd.DataFrame) -> pd.DataFrame:
+    """The coefficients table as printed: each coefficient with its interval in one cell
+    ("0.218 [0.200, 0.233]"), y against x in one column; the CSV keeps one column per number."""
+    col = lambda c: df[c] if c in df else pd.Series("", index=df.index)
+    both = lambda v, iv: "–" if not (isinstance(v, (int, float)) and math.isfinite(v)) else \
+        f"{_fmt(v, 3)} {iv}".strip() if isinstance(iv, str) else _fmt(v, 3)
+    out = pd.DataFrame({"figure": col("figure"), "y against x": [f"{y} against {x}" for y, x in zip(col("y"), col("x"))],
+                        "model": col("model"), "slice": col("slice"), "n": col("n")})
+    for b in ("b0", "b1", "b2"):
+        if b in df:
+            out[f"{b} [95 %]"] = [both(v, iv) for v, iv in zip(df[b], col(f"{b} 95%"))]
+    if "c" in df:
+        out["c [95 % profile]"] = [both(v, iv) for v, iv in zip(df["c"], col("c 95% (profile)"))]
+    if "c 95% (bootstrap)" in df:
+        out["c 95 % bootstrap"] = [f"{iv} ({b})" if isinstance(iv, str) and iv and isinstance(b, str) else
+                                   (iv if isinstance(iv, str) else "") for iv, b in zip(df["c 95% (bootstrap)"], col("bootstrap"))]
+    if "c 95% (residual)" in df:
+        out["c 95 % residual"] = col("c 95% (residual)").fillna("")
+    out["R² [-]"] = col("R² [-]")
+    out["note"] = col("note").fillna("")
+    return out
 
 
 def _safe(name) -> str:
