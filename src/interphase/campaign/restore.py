@@ -34,11 +34,12 @@ from interphase.errors import InputError
 
 def _not_summary() -> set[str]:
     """Columns of the summaries table that are not the run's summary: the report's run columns and
-    bookkeeping (report.build, which writes the table), its derived efficiency and the index's own
-    columns (the Case parameters are dropped by name per case)."""
+    bookkeeping (report.build, which writes the table), its derived per-run ratio (`efficiency_run`;
+    `efficiency` in tables written before it was renamed) and the index's own columns (the Case
+    parameters are dropped by name per case)."""
     from interphase.report.build import BOOKKEEPING, RUN_COLUMNS
 
-    return {*RUN_COLUMNS, *BOOKKEEPING, *st._COLUMNS, "efficiency"}
+    return {*RUN_COLUMNS, *BOOKKEEPING, *st._COLUMNS, "efficiency_run", "efficiency"}
 
 
 @dataclass

@@ -236,14 +236,15 @@ BOOKKEEPING = ("status", "cause", "started", "finished", "attempts", "host", "sl
 
 def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
     """Every finished run as one row of a small CSV (what a reproduction commits: no dumps): the
-    columns above, the rest by their own names, and `efficiency` = this run's peak stress ratio over
-    its paired box test's (same packing seed; NaN for box tests). Sorted by group and label, so a
-    rerun diffs cleanly."""
+    columns above, the rest by their own names, and `efficiency_run` = E_run, this run's peak stress
+    ratio over its paired box test's (same packing seed; NaN for box tests): one run's ratio, not the
+    physical case's E (the seed ensembles' ratio, tables `ensembles` and `results`; docs/methods.md).
+    Sorted by group and label, so a rerun diffs cleanly."""
     df = summaries.copy()
     peak = pd.to_numeric(df.get("peak_stress_ratio"), errors="coerce")
     by_id = pd.Series(peak.to_numpy(), index=df["case_id"].astype(str))
     box_peak = df["pair_id"].astype(str).map(by_id) if "pair_id" in df else pd.Series(math.nan, index=df.index)
-    df["efficiency"] = peak / pd.to_numeric(box_peak, errors="coerce")
+    df["efficiency_run"] = peak / pd.to_numeric(box_peak, errors="coerce")
     first = [c for c in RUN_COLUMNS if c in df]
     rest = [c for c in df.columns if c not in first and c not in BOOKKEEPING]
     df = df[first + rest].sort_values(["group", "label"], kind="stable")
