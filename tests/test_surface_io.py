@@ -9,8 +9,10 @@ import pytest
 
 from interphase.cli import main
 from interphase.surface.mesh import write_stl
-from interphase.surface.profiles import from_spec, random_profile, sawtooth, tile
-from interphase.surface.readers import centerline, gaussian_filter, read_profile
+from interphase.surface.builder import file_spec, from_spec
+from interphase.surface.filters import centerline, gaussian_filter
+from interphase.surface.profiles import random_profile, sawtooth, tile
+from interphase.surface.readers import read_profile
 from interphase.surface.spec import ProfileSpec
 
 D50 = 0.7e-3
@@ -122,7 +124,7 @@ def test_random_profiles_differ_when_every_step_overshoots_the_band():
 def test_from_spec_covers_length_and_tiles_measured(dektak_csv):
     for spec in (ProfileSpec.make("flat"), ProfileSpec.make("sawtooth", rt=1, sw=2, sr=1),
                  ProfileSpec.make("random", au=2, ar=1, rtmax=2, seed=1),
-                 ProfileSpec.from_file(dektak_csv, units="um")):
+                 file_spec(dektak_csv, units="um")):
         p = from_spec(spec, D50, 30e-3)
         assert p.x[0] == 0 and p.length >= 30e-3
     t = tile(read_profile(dektak_csv), 5e-3)

@@ -104,11 +104,11 @@ def _load_measured(path: str, units, cutoff_mm=None):
 
 
 def _cmd_theta_a(args) -> int:
-    from interphase.surface.instruments import read_scan
+    from interphase.surface.readers import read_scan
 
     d50 = _d50_m(args.d50)
     if args.units is not None:
-        from interphase.surface.profiles import units_factor
+        from interphase.surface.units import units_factor
 
         units_factor(args.units)
     scan = read_scan(args.profile, args.units)
