@@ -278,7 +278,7 @@ def test_a_measured_line_runs_through_the_engine(tmp_path):
 
     need_binary("liggghts")
     spec = file_spec(ROOT / "campaigns" / "profiles" / "frt-2.frt", units=None, axis="x", line="2/3",
-                                 direction="-")
+                     direction="-")
     case = Case(profile=spec, device="periodic", box_length_d50=16, box_height_d50=8, shear_distance=1e-3,
                 snapshot_every=5e-4, shear_modulus=50e6, friction_ps=0.5)
     res = run_single(case, "liggghts", tmp_path / "case")
