@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from interphase.surface.areal import theta_a_scan
-from interphase.surface.instruments import Scan, read_scan
+from interphase.surface.base import Scan
+from interphase.surface.readers import read_scan
 
 REPEATS = 3
 D50 = 0.7e-3

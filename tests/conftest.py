@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import inspect
+import re
 import shutil
 from pathlib import Path
 
@@ -15,6 +17,40 @@ DATA = ROOT / "tests" / "data"
 def dektak_csv() -> Path:
     """The real stylus-profilometer export (tests/data/README.md)."""
     return DATA / "dektak-1.csv"
+
+
+_NEEDS = re.compile(r"need_binary\(\s*[\"'](\w+)[\"']")
+
+
+def _engines_needed(func, cache: dict) -> set[str]:
+    """The engines whose binary `func`'s body asks for (need_binary("…"))."""
+    if func not in cache:
+        try:
+            cache[func] = set(_NEEDS.findall(inspect.getsource(func)))
+        except (OSError, TypeError):
+            cache[func] = set()
+    return cache[func]
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Every test that needs an engine carries its marker, so that the engine-free selection
+    (-m "not liggghts and not yade and not slurm") runs none: a test whose body or any of its
+    fixtures (directly or through others) calls need_binary(name) must be marked `name`."""
+    cache: dict = {}
+    unmarked = []
+    for item in items:
+        funcs = [getattr(item, "function", None)]
+        info = getattr(item, "_fixtureinfo", None)
+        for defs in (info.name2fixturedefs.values() if info is not None else ()):
+            funcs += [d.func for d in defs]
+        needed = set().union(*(_engines_needed(f, cache) for f in funcs if f is not None))
+        missing = needed - {m.name for m in item.iter_markers()}
+        if missing:
+            unmarked.append(f"{item.nodeid}: needs {', '.join(sorted(missing))}")
+    if unmarked:
+        raise pytest.UsageError("tests that run an engine without its marker (add @pytest.mark.<engine>):\n  "
+                                + "\n  ".join(unmarked))
 
 
 def need_binary(name: str) -> str:

@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 from numpy.lib.stride_tricks import sliding_window_view
 
 from interphase.surface.areal import dilate_blocks, theta_a_lines, theta_a_scan
-from interphase.surface.instruments import read_scan
 from interphase.surface.normals import theta_a_filters
 from interphase.surface.profiles import Profile
+from interphase.surface.readers import read_scan
 from interphase.surface.trace import dilate_half_disk
 
 DATA = Path(__file__).parent / "data" / "profiles"

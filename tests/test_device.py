@@ -214,7 +214,7 @@ def test_side_walls_clear_the_peaks_for_every_study_profile():
     from pathlib import Path
 
     from interphase.campaign.schema import load_campaign
-    from interphase.surface.profiles import from_spec
+    from interphase.surface.builder import from_spec
 
     root = Path(__file__).resolve().parents[1] / "campaigns"
     seen = set()
@@ -284,9 +284,9 @@ def test_periodic_device_closes_every_surface_into_its_cell():
     # a cut next to a sample leaves no sliver: the mean-height crossing 0.15 µm from a sample of the
     # shipped FRT scan's line x 1/3 made a 0.15 µm face that LIGGGHTS refused (bad_mesh); every face
     # at a cut is now ≥ 2 % of D50, and every other face is the profile's own
-    from interphase.surface.profiles import MIN_FACE_D50
+    from interphase.surface.builder import MIN_FACE_D50, file_spec
 
-    frt = Case(profile=ProfileSpec.from_file(ROOT / "campaigns" / "profiles" / "frt-1.frt", axis="x", line="1/3"),
+    frt = Case(profile=file_spec(ROOT / "campaigns" / "profiles" / "frt-1.frt", axis="x", line="1/3"),
                device="periodic", **SMALL).surface()
     faces = np.hypot(np.diff(frt.x), np.diff(frt.z))
     assert faces.min() >= MIN_FACE_D50 * 0.7e-3 and np.median(faces) == pytest.approx(24e-6, rel=0.01)

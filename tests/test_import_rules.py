@@ -92,7 +92,7 @@ def test_the_checker_flags_a_forbidden_import(module, source):
 @pytest.mark.parametrize("module, source", [
     ("interphase.io.liggghts", "from interphase.tables import CONTACT_COLUMNS\n"),
     ("interphase.analysis.quasistatic", "from interphase.case import Case\n"),
-    ("interphase.analysis.stress", "from interphase.surface.profiles import from_spec\n"),
+    ("interphase.analysis.stress", "from interphase.surface.builder import from_spec\n"),
     ("interphase.engines.liggghts", "from interphase.io.liggghts import read_folder\n"),
     ("interphase.campaign.runner", "from interphase.engines.base import get_engine\n"),
     ("interphase.cli", "from interphase.campaign.runner import run_single\n"),

@@ -1,4 +1,4 @@
-"""Instrument files as they come (surface/instruments.py), MDAnalysis style: one contract class,
+"""Instrument files as they come (surface/readers.py, lines chosen by surface/lines.py), MDAnalysis style: one contract class,
 inherited once per shipped format with that file's known answers (sizes, units, missing points, a θa).
 
 The files are real instrument exports from SurfaceTopography's test corpus (tests/data/profiles/
@@ -20,10 +20,11 @@ from interphase.case import Case
 from interphase.cli import main
 from interphase.engines.liggghts import Liggghts
 from interphase.errors import InputError
-from interphase.surface.instruments import line_profile, parse_line, read_scan, spread_index
+from interphase.surface.builder import file_spec, from_spec
+from interphase.surface.lines import line_profile, parse_line, spread_index
 from interphase.surface.normals import theta_a_filters
-from interphase.surface.profiles import from_spec, selfaffine_profile
-from interphase.surface.readers import read_profile
+from interphase.surface.profiles import selfaffine_profile
+from interphase.surface.readers import read_profile, read_scan
 from interphase.surface.spec import ProfileSpec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -200,8 +201,8 @@ def test_line_choice_by_index_or_spread():
 
 
 def test_spec_builds_the_levelled_longest_run_and_its_mirror():
-    spec = ProfileSpec.from_file(FRT1, units=None, axis="x", line="1/3")
-    rev = ProfileSpec.from_file(FRT1, units=None, axis="x", line="1/3", direction="-")
+    spec = file_spec(FRT1, units=None, axis="x", line="1/3")
+    rev = file_spec(FRT1, units=None, axis="x", line="1/3", direction="-")
     assert spec.canonical() != rev.canonical() and spec.label() == "frt-1-x1of3" and rev.label().endswith("-rev")
     p, q = from_spec(spec, D50, 0.0), from_spec(rev, D50, 0.0)
     assert p.x[0] == 0 and abs(np.polyfit(p.x, p.z, 1)[0]) < 1e-9           # levelled
@@ -218,13 +219,13 @@ def test_spec_builds_the_levelled_longest_run_and_its_mirror():
 
 
 def test_old_file_specs_keep_their_identity(dektak_csv):
-    spec = ProfileSpec.from_file(dektak_csv, units="um")
+    spec = file_spec(dektak_csv, units="um")
     assert set(spec.canonical()) == {"kind", "sha256", "units", "cutoff"}
 
 
 def test_a_line_outside_the_scan_is_refused_at_load():
     with pytest.raises(InputError, match="outside the scan"):
-        ProfileSpec.from_file(FRT1, units=None, axis="y", line=500)
+        file_spec(FRT1, units=None, axis="y", line=500)
 
 
 SMALL = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10, shear_distance=2e-3,
@@ -234,7 +235,7 @@ SMALL = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50
 @pytest.mark.parametrize("path,axis,device", [
     (FRT1, "x", "walled"), (FRT1, "x", "periodic"), (PROFILES / "frt-2.frt", "y", "walled")])
 def test_a_case_on_a_measured_line_renders(path, axis, device):
-    spec = ProfileSpec.from_file(path, units=None, axis=axis, line="2/3")
+    spec = file_spec(path, units=None, axis=axis, line="2/3")
     case = Case(profile=spec, device=device, **SMALL)
     surf = case.surface()
     assert surf.periodic is (device == "periodic")
@@ -245,7 +246,7 @@ def test_a_case_on_a_measured_line_renders(path, axis, device):
 def test_a_line_with_an_edge_step_closes_at_its_mean_height():
     # frt-2's y line 2/3 starts on an edge value it never meets again: the periodic cell is cut
     # between crossings of the line's mean height instead (surface.profiles.close)
-    spec = ProfileSpec.from_file(PROFILES / "frt-2.frt", units=None, axis="y", line="2/3")
+    spec = file_spec(PROFILES / "frt-2.frt", units=None, axis="y", line="2/3")
     case = Case(profile=spec, device="periodic", **SMALL)
     s = case.surface()
     assert s.periodic and s.z[0] == s.z[-1] and abs(case.box_length / case.d50 - SMALL["box_length_d50"]) < 5
@@ -276,8 +277,8 @@ def test_a_measured_line_runs_through_the_engine(tmp_path):
     from .conftest import need_binary
 
     need_binary("liggghts")
-    spec = ProfileSpec.from_file(ROOT / "campaigns" / "profiles" / "frt-2.frt", units=None, axis="x", line="2/3",
-                                 direction="-")
+    spec = file_spec(ROOT / "campaigns" / "profiles" / "frt-2.frt", units=None, axis="x", line="2/3",
+                     direction="-")
     case = Case(profile=spec, device="periodic", box_length_d50=16, box_height_d50=8, shear_distance=1e-3,
                 snapshot_every=5e-4, shear_modulus=50e6, friction_ps=0.5)
     res = run_single(case, "liggghts", tmp_path / "case")

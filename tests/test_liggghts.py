@@ -247,7 +247,7 @@ def test_no_duplicated_surface_contacts(run):
 
 def test_side_walls_clear_grains_trapped_in_valleys():
     from interphase.engines.device import wall_gap
-    from interphase.surface.profiles import from_spec
+    from interphase.surface.builder import from_spec
     d50, dmin, dmax = 0.7e-3, 0.665e-3, 0.735e-3
     flat = from_spec(ProfileSpec.make("flat"), d50, 20 * d50)
     saw = from_spec(ProfileSpec.make("sawtooth", rt=1.0, sw=2.0, sr=0.0), d50, 20 * d50)

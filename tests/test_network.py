@@ -51,8 +51,17 @@ def test_vtk_lines_carry_forces(tmp_path):
     assert mesh.points[3] == pytest.approx([0.2e-3, 0.0, 0.5e-3])
 
 
-def test_polydata_in_memory_matches_snapshot():
-    assert network_polydata(small_table(), 1).n_cells == 1
+def test_polydata_in_memory_holds_exactly_the_chosen_snapshot():
+    c = small_table()
+    one = network_polydata(c, 1)              # snapshot 1: the last row only
+    assert one.n_cells == 1 and one.n_points == 2
+    assert one.points.tolist() == [[0.0, 0.0, 1e-3], [1e-3, 0.0, 1e-3]]
+    assert one.cell_data["fn"].tolist() == [1.0] and one.cell_data["kind"].tolist() == [KIND_CODE["pp"]]
+    zero = network_polydata(c, 0)             # snapshot 0: the first three rows, in order
+    assert zero.n_cells == 3
+    assert zero.cell_data["kind"].tolist() == [KIND_CODE[k] for k in ("pp", "ps", "pw")]
+    assert zero.cell_data["force"] == pytest.approx(np.hypot([1.0, -0.1, -0.5], [0.0, 3.0, 0.0]))
+    assert zero.cell_data["ft"].tolist() == [0.0, 0.1, 0.0]
 
 
 def test_bad_snapshot_and_missing_column(tmp_path):

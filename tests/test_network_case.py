@@ -199,6 +199,7 @@ def test_cli_animate_unknown_label_exits_2_with_a_message(quick_campaign, tmp_pa
     assert not (tmp_path / "r" / "figures").exists()
 
 
+@pytest.mark.liggghts
 def test_a_long_animation_is_capped_evenly(peak_run, tmp_path):
     from PIL import Image
 

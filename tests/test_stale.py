@@ -25,6 +25,8 @@ from interphase.cli import main
 from interphase.recipe import RECIPE_VERSIONS
 from interphase.report.build import build_report, open_campaign, recipe_notes
 
+pytestmark = pytest.mark.liggghts      # every test copies the session's real LIGGGHTS quick campaign
+
 
 @pytest.fixture()
 def one_seed(quick_campaign, tmp_path):

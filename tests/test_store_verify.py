@@ -16,6 +16,8 @@ from interphase.campaign.run import campaign_status
 from interphase.campaign.store import CampaignStore, folder_status
 from interphase.cli import main
 
+pytestmark = pytest.mark.liggghts      # every test copies the session's real LIGGGHTS quick campaign
+
 
 @pytest.fixture()
 def runs(quick_campaign, tmp_path):

@@ -14,8 +14,10 @@ from hypothesis import strategies as st
 from interphase.cli import main
 from interphase.surface.mesh import write_stl
 from interphase.surface.normals import principal_direction, segment_normals, theta_a
-from interphase.surface.profiles import Profile, from_spec, random_profile, sawtooth
-from interphase.surface.readers import prepare_measured, read_profile
+from interphase.surface.builder import file_spec, from_spec
+from interphase.surface.filters import prepare_measured
+from interphase.surface.profiles import Profile, random_profile, sawtooth
+from interphase.surface.readers import read_profile
 from interphase.surface.roughness import rn
 from interphase.surface.spec import ProfileSpec
 from interphase.surface.trace import centroid_trace, dilate_half_disk
@@ -167,8 +169,8 @@ def test_dektak_is_non_dilative_because_its_relief_is_sub_micron(dektak_csv):
 
 
 def test_spec_cutoff_filters_the_measured_profile(dektak_csv):
-    raw = from_spec(ProfileSpec.from_file(dektak_csv, units="um"), D50, 1e-3)
-    filt = from_spec(ProfileSpec.from_file(dektak_csv, units="um", cutoff=80e-6), D50, 1e-3)
+    raw = from_spec(file_spec(dektak_csv, units="um"), D50, 1e-3)
+    filt = from_spec(file_spec(dektak_csv, units="um", cutoff=80e-6), D50, 1e-3)
     assert raw.x[0] == 0 and filt.x[0] == 0 and filt.length >= 1e-3
     # λc = 80 µm removes the waviness: less height spread, and the filtered line has no trend
     assert 0 < np.std(filt.z) < 0.9 * np.std(raw.z)

@@ -8,9 +8,12 @@ import numpy as np
 import pytest
 
 from interphase.cli import main
+from interphase.errors import InputError
+from interphase.surface.builder import file_spec, from_spec
+from interphase.surface.filters import centerline, gaussian_filter
 from interphase.surface.mesh import write_stl
-from interphase.surface.profiles import from_spec, random_profile, sawtooth, tile
-from interphase.surface.readers import centerline, gaussian_filter, read_profile
+from interphase.surface.profiles import random_profile, sawtooth, tile
+from interphase.surface.readers import read_profile
 from interphase.surface.spec import ProfileSpec
 
 D50 = 0.7e-3
@@ -122,11 +125,32 @@ def test_random_profiles_differ_when_every_step_overshoots_the_band():
 def test_from_spec_covers_length_and_tiles_measured(dektak_csv):
     for spec in (ProfileSpec.make("flat"), ProfileSpec.make("sawtooth", rt=1, sw=2, sr=1),
                  ProfileSpec.make("random", au=2, ar=1, rtmax=2, seed=1),
-                 ProfileSpec.from_file(dektak_csv, units="um")):
+                 file_spec(dektak_csv, units="um")):
         p = from_spec(spec, D50, 30e-3)
         assert p.x[0] == 0 and p.length >= 30e-3
     t = tile(read_profile(dektak_csv), 5e-3)
     assert np.all(np.diff(t.x) > 0)
+
+
+def test_a_spec_is_data_and_the_builder_hashes_the_file(tmp_path, dektak_csv):
+    import hashlib
+
+    digest = hashlib.sha256(dektak_csv.read_bytes()).hexdigest()
+    # a spec reads nothing: a path that does not exist makes a spec all the same
+    spec = ProfileSpec(kind="file", path=str(tmp_path / "nowhere.csv"), units="um", sha256=digest)
+    assert spec.canonical()["sha256"] == digest and spec.label() == "nowhere"
+    with pytest.raises(InputError, match="SHA-256"):
+        ProfileSpec(kind="file", path=str(dektak_csv), units="um")
+    with pytest.raises(InputError, match="unknown units 'nm'"):
+        ProfileSpec(kind="file", path=str(dektak_csv), units="nm", sha256=digest)
+    # the builder of specs from user input hashes the file: same content, same identity
+    built = file_spec(dektak_csv, units="um")
+    assert built.sha256 == digest
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(dektak_csv.read_bytes())
+    assert file_spec(copy, units="um").canonical() == built.canonical()
+    with pytest.raises(InputError, match="does not exist"):
+        file_spec(tmp_path / "nowhere.csv")
 
 
 def test_centerline_and_gaussian_filter():

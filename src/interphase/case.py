@@ -160,8 +160,8 @@ class Case:
     @functools.cached_property
     def _cell(self):
         """The periodic device's surface (computed once per Case; a random or measured profile is
-        generated and cut, see surface.profiles.periodic_cell)."""
-        from interphase.surface.profiles import periodic_cell
+        generated and cut, see surface.builder.periodic_cell)."""
+        from interphase.surface.builder import periodic_cell
 
         return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50)
 
@@ -182,7 +182,8 @@ class Case:
         surface_margin (it slides −x by shear_distance beneath the box [0, L]); periodic device,
         exactly the cell [0, L] (`box_length`; the engine wraps it). The one profile object of the
         case: the engines build their meshes from it, the analysis measures it (`sheared_surface`)."""
-        from interphase.surface.profiles import Profile, from_spec
+        from interphase.surface.base import Profile
+        from interphase.surface.builder import from_spec
 
         if self.periodic:       # exactly [0, L]: the engine wraps it as it slides
             return self._cell
@@ -292,6 +293,8 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     """
     from pathlib import Path
 
+    from interphase.surface.builder import file_spec
+
     fields = {f.name: f for f in dataclasses.fields(Case) if f.name not in PLANNED_FIELDS}
     kwargs = {}
     for key, value in data.items():
@@ -320,9 +323,9 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
             path = Path(prof["path"])
             if base_dir is not None and not path.is_absolute():
                 path = Path(base_dir) / path
-            kwargs["profile"] = ProfileSpec.from_file(path, units=prof.get("units"), cutoff=prof.get("cutoff"),
-                                                      where=f"{where}.profile", axis=prof.get("axis"),
-                                                      line=prof.get("line"), direction=prof.get("direction", "+"))
+            kwargs["profile"] = file_spec(path, units=prof.get("units"), cutoff=prof.get("cutoff"),
+                                          where=f"{where}.profile", axis=prof.get("axis"),
+                                          line=prof.get("line"), direction=prof.get("direction", "+"))
         else:
             kwargs["profile"] = ProfileSpec.make(kind, where=f"{where}.profile", **prof)
     grad = kwargs.get("gradation")

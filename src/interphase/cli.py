@@ -104,14 +104,10 @@ def _load_measured(path: str, units, cutoff_mm=None):
 
 
 def _cmd_theta_a(args) -> int:
-    from interphase.surface.instruments import read_scan
+    from interphase.surface.readers import read_scan
 
     d50 = _d50_m(args.d50)
-    if args.units is not None:
-        from interphase.surface.profiles import units_factor
-
-        units_factor(args.units)
-    scan = read_scan(args.profile, args.units)
+    scan = read_scan(args.profile, args.units)      # unknown --units are refused before the file is read
     if scan.areal:
         return _theta_a_areal(args, scan, d50)
     if args.axis == "y":

@@ -337,7 +337,7 @@ def profile_features(case) -> Stage:
         out.reasons = dict.fromkeys(PROFILE_KEYS, "box test: no surface profile")
         return out
     from interphase.surface.normals import theta_a_filters
-    from interphase.surface.profiles import from_spec
+    from interphase.surface.builder import from_spec
 
     # the surface the engine sheared (Case.sheared_surface); a saw-tooth is periodic: the trace of n
     # periods is n copies of one period's, so one period gives the same θa, Rn, Rnc and slope at 1/n

@@ -168,7 +168,7 @@ def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
 def _profiles_for_polar(campaign, points) -> list[tuple[str, object]]:
     """Up to MAX_POLAR distinct dilative-looking profiles: one per group first (the study's 6.6 picks a
     Group 1 saw-tooth, a Group 2 spaced one, a random one and a measured one)."""
-    from interphase.surface.profiles import from_spec
+    from interphase.surface.builder import from_spec
 
     chosen, seen = [], set()
     if campaign is None:

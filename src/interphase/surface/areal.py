@@ -24,7 +24,8 @@ import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from interphase.errors import InputError
-from interphase.surface.instruments import Scan, check_axis, valid_runs
+from interphase.surface.base import Scan, check_axis
+from interphase.surface.lines import valid_runs
 from interphase.surface.normals import FILTERS, FLAT_TOLERANCE_DEG, keep_mask
 
 MIN_RUN_D50 = 5.0

@@ -12,7 +12,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from interphase.surface.profiles import Profile
+from interphase.surface.base import Profile
 
 
 def extruded_triangles(profile: Profile, y_min: float, y_max: float) -> tuple[np.ndarray, np.ndarray]:

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from interphase.errors import InputError
-from interphase.surface.profiles import Profile
+from interphase.surface.base import Profile
 from interphase.surface.roughness import rn as _rn
 from interphase.surface.trace import centroid_trace
 

@@ -11,8 +11,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from interphase.surface.base import Profile  # noqa: E402
 from interphase.surface.normals import keep_mask, segment_normals, theta_a  # noqa: E402
-from interphase.surface.profiles import Profile  # noqa: E402
 from interphase.surface.trace import centroid_trace  # noqa: E402
 
 

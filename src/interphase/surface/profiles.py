@@ -1,52 +1,23 @@
-"""Surface profiles z(x): the study's generated groups and the dispatch from a ProfileSpec.
+"""Surface profiles z(x): the study's generated groups and the geometry of profiles (crop, tile,
+close into a periodic cell). Pure functions: no file is read (surface/readers.py), no spec is
+interpreted (surface/builder.py).
 
-A Profile is a polyline in metres. Generated profiles (docs/methods.md §1) take sizes in D50 units and
-return their exact corner vertices, so nothing is lost before the centroid trace resamples them.
-Periodic convention: a periodic profile stores one closing vertex, z[-1] == z[0], and its period is
-x[-1] − x[0]; z(x + period) = z(x).
+A Profile (surface/base.py) is a polyline in metres. Generated profiles (docs/methods.md §1) take
+sizes in D50 units and return their exact corner vertices, so nothing is lost before the centroid
+trace resamples them. Periodic convention: a periodic profile stores one closing vertex,
+z[-1] == z[0], and its period is x[-1] − x[0]; z(x + period) = z(x).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from interphase.errors import InputError
-from interphase.surface.spec import UNITS, ProfileSpec
+from interphase.surface.base import Profile
 
-
-@dataclass(frozen=True, eq=False)
-class Profile:
-    x: np.ndarray          # [m], strictly increasing
-    z: np.ndarray          # [m], up into the soil
-    periodic: bool = False
-    name: str = ""
-
-    def __post_init__(self):
-        x = np.asarray(self.x, dtype=float)
-        z = np.asarray(self.z, dtype=float)
-        object.__setattr__(self, "x", x)
-        object.__setattr__(self, "z", z)
-        if x.ndim != 1 or x.shape != z.shape or x.size < 2:
-            raise InputError("a profile needs at least two (x, z) points of equal count", where=self.name or "profile")
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
-            raise InputError("profile contains NaN or infinite values", where=self.name or "profile")
-        if np.any(np.diff(x) <= 0):
-            raise InputError("profile x must increase strictly", where=self.name or "profile")
-
-    @property
-    def length(self) -> float:
-        """Horizontal extent [m] (the period for a periodic profile)."""
-        return float(self.x[-1] - self.x[0])
-
-    def scaled(self, factor: float) -> "Profile":
-        return Profile(self.x * factor, self.z * factor, self.periodic, self.name)
-
-    def mirrored(self) -> "Profile":
-        """x → −x (then re-sorted): the same surface sheared the other way (shear_sign flipped)."""
-        return Profile(-self.x[::-1], self.z[::-1], self.periodic, self.name)
+__all__ = ["Profile", "close", "crop", "flat", "random_profile", "sawtooth", "selfaffine_profile", "tile"]
 
 
 def flat(length: float, name: str = "flat") -> Profile:
@@ -209,64 +180,3 @@ def close(profile: Profile, length: float, min_face: float = 0.0) -> Profile:
     xs = np.concatenate([[start], xi[keep], [end]]) - start
     zs = np.concatenate([[level], zi[keep], [level]])
     return Profile(xs, zs, periodic=True, name=profile.name)
-
-
-def periodic_cell(spec: ProfileSpec, d50: float, length: float) -> Profile:
-    """The surface of the periodic device for a requested cell of about `length` m, from x = 0:
-    flat, `length` exactly; a saw-tooth, the whole number of its periods nearest `length` (at least
-    one); a random or measured profile, `close`d where it returns to its starting height, with no
-    face at a cut shorter than MIN_FACE_D50·D50."""
-    if spec.kind == "flat":
-        return flat(length)
-    if spec.kind == "sawtooth":
-        lam = (spec.param("sw") + spec.param("sr")) * d50
-        return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50,
-                        periods=max(1, round(length / lam)))
-    return close(from_spec(spec, d50, 2 * length), length, min_face=MIN_FACE_D50 * d50)
-
-
-#: Shortest face a periodic cell's cut may leave [D50]. Far below what a grain can feel, and above
-#: the thinnest face LIGGGHTS meshes: its triangles must have angles ≥ 0.256°, so a face shorter than
-#: wall width × tan 0.256° (~8.5 µm for the ~1.9 mm wide wall of the study's grains) is refused. No
-#: cell of the shipped campaigns had a face at a cut between that and 2 % of D50 (14 µm): the cut
-#: faces that LIGGGHTS did mesh are unchanged (random profiles A-G ≥ 0.29 mm, FRT lines ≥ 17 µm).
-MIN_FACE_D50 = 0.02
-
-
-def from_spec(spec: ProfileSpec, d50: float, length: float) -> Profile:
-    """The Profile a Case refers to, starting at x = 0 and covering at least `length` m."""
-    if spec.kind == "flat":
-        return flat(length)
-    if spec.kind == "sawtooth":
-        return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50, length=length)
-    if spec.kind == "random":
-        return random_profile(spec.param("au"), spec.param("ar"), spec.param("rtmax"), d50=d50, length=length,
-                              seed=int(spec.param("seed")))
-    if spec.kind == "selfaffine":
-        return tile(selfaffine_profile(spec.param("hurst"), spec.param("rms_slope"), spec.param("long_cutoff"),
-                                       spec.param("short_cutoff"), spec.param("length"), int(spec.param("seed")),
-                                       d50=d50), length)
-    from interphase.surface.readers import gaussian_filter, prepare_measured, read_profile
-
-    if spec.axis is None and spec.line is None and spec.direction == "+":
-        # a line file as before (an areal scan: its middle line along x, through line_profile below)
-        from interphase.surface.instruments import read_scan
-
-        scan = read_scan(spec.path, units=spec.units)
-        if not scan.areal:
-            prof = prepare_measured(read_profile(spec.path, units=spec.units), cutoff=spec.cutoff)
-            return tile(prof, length)
-    from interphase.surface.instruments import line_profile, read_scan
-
-    scan = read_scan(spec.path, units=spec.units)
-    prof = line_profile(scan, spec.axis or "x", spec.line, spec.direction, d50=d50)   # levelled, longest run
-    if spec.cutoff is not None:
-        prof = gaussian_filter(prof, spec.cutoff)
-    return tile(prof, length)
-
-
-def units_factor(units: str, where: str = "--units") -> float:
-    """Metres per unit for 'm' | 'mm' | 'um'."""
-    if units not in UNITS:
-        raise InputError(f"unknown units {units!r}", where=where, fix=f"use one of {', '.join(UNITS)}")
-    return UNITS[units]

@@ -12,16 +12,15 @@ import math
 import numpy as np
 from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-from interphase.surface.profiles import Profile
+from interphase.surface.base import Profile
+from interphase.surface.filters import centerline, resample
+from interphase.surface.trace import uniform_grid
 
 
 def rt_ave(profile: Profile, window: float, dx: float | None = None) -> float:
     """Mean peak-to-valley height [m] over sliding windows of `window` m (every start on a uniform
     grid of step ≤ dx, default window/500). Periodic profiles wrap; open ones use full windows only.
     The least-squares line is removed first."""
-    from interphase.surface.readers import centerline, resample
-    from interphase.surface.trace import uniform_grid
-
     dx = dx or window / 500
     if profile.periodic:
         _, z, step = uniform_grid(profile, dx)

@@ -1,8 +1,10 @@
 """ProfileSpec: the engine-free reference to a surface profile that a Case carries.
 
-A spec is data (hashable, canonical), not the profile itself: `interphase.surface.profiles.from_spec`
-builds the Profile. Sizes in `params` are in D50 units (docs/methods.md §1); a file spec carries the
-file's SHA-256 so that a case's identity follows the file's content, not its path.
+A spec is plain data (hashable, canonical; it reads no file), not the profile itself:
+`interphase.surface.builder.from_spec` builds the Profile, and `builder.file_spec` builds a file spec
+from a user's input (it reads and hashes the file). Sizes in `params` are in D50 units
+(docs/methods.md §1); a file spec carries the file's SHA-256 so that a case's identity follows the
+file's content, not its path.
 
 kinds and their params:
   flat      —
@@ -12,7 +14,7 @@ kinds and their params:
                                  (Fourier synthesis through SurfaceTopography: Hurst exponent 0 < H < 1,
                                  rms slope, roll-off and short cut-off wavelengths and the period, D50 units)
   file      path, units, sha256 (+ optional cutoff: Gaussian filter cut-off in m; units None = the
-            file's own). A line of a scan (line or areal, any format instruments.read_scan reads):
+            file's own). A line of a scan (line or areal, any format readers.read_scan reads):
             optional axis "x" | "y" (grid lines along that axis; default x), line (an index, or "k/n":
             the k-th of n lines spread over the scan; default the middle line), direction "+" | "-"
             ("-": the line mirrored, sheared the other way). Specs without them keep their identity.
@@ -20,12 +22,14 @@ kinds and their params:
 
 from __future__ import annotations
 
-import hashlib
 import math
+import re
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import PurePath
 
 from interphase.errors import InputError
+from interphase.surface.base import DIRECTIONS, check_axis
+from interphase.surface.units import units_factor
 
 KIND_PARAMS = {
     "flat": (),
@@ -34,15 +38,7 @@ KIND_PARAMS = {
     "selfaffine": ("hurst", "rms_slope", "long_cutoff", "short_cutoff", "length", "seed"),
     "file": (),
 }
-UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
-
-
-def file_sha256(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+_SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
 @dataclass(frozen=True)
@@ -101,18 +97,20 @@ class ProfileSpec:
         if self.kind == "file":
             if not self.path:
                 raise InputError("a file profile needs a path", where=f"{self.where}.path")
-            if self.axis not in (None, "x", "y"):
-                raise InputError(f"unknown axis {self.axis!r}", where=f"{self.where}.axis",
-                                 fix="use x (the file's first axis) or y")
-            if self.direction not in ("+", "-"):
+            if not isinstance(self.sha256, str) or not _SHA256.fullmatch(self.sha256):
+                raise InputError(f"a file profile needs the file's SHA-256, got {self.sha256!r}",
+                                 where=f"{self.where}.sha256",
+                                 fix="build it with interphase.surface.builder.file_spec, which hashes the file")
+            if self.axis is not None:
+                check_axis(self.axis, f"{self.where}.axis")
+            if self.direction not in DIRECTIONS:
                 raise InputError(f"unknown direction {self.direction!r}", where=f"{self.where}.direction",
                                  fix="use \"+\" (as measured) or \"-\" (mirrored: sheared the other way)")
             if self.line is not None and (isinstance(self.line, bool) or not isinstance(self.line, (int, str))):
                 raise InputError(f"line must be an integer index or \"k/n\", got {self.line!r}",
                                  where=f"{self.where}.line")
-            if self.units is not None and self.units not in UNITS:
-                raise InputError(f"unknown units {self.units!r}", where=f"{self.where}.units",
-                                 fix=f"use one of {', '.join(UNITS)}")
+            if self.units is not None:
+                units_factor(self.units, f"{self.where}.units")
             if self.cutoff is not None and not (math.isfinite(self.cutoff) and self.cutoff > 0):
                 raise InputError("cutoff must be a positive length in m", where=f"{self.where}.cutoff")
 
@@ -120,29 +118,6 @@ class ProfileSpec:
     def make(cls, kind: str, where: str = "profile", **params) -> "ProfileSpec":
         """Generated profile from keyword params, e.g. ProfileSpec.make('sawtooth', rt=1, sw=2, sr=0)."""
         return cls(kind=kind, params=tuple(sorted(params.items())), where=where)
-
-    @classmethod
-    def from_file(cls, path: str | Path, units: str | None = "m", cutoff: float | None = None,
-                  where: str = "profile", axis: str | None = None, line: int | str | None = None,
-                  direction: str = "+") -> "ProfileSpec":
-        """A file profile; with axis/line the file is read now, so that a line outside the scan or a
-        file no reader takes is refused when the campaign is loaded, not when a case runs."""
-        p = Path(path)
-        if not p.is_file():
-            raise InputError(f"profile file {str(p)!r} does not exist", where=f"{where}.path",
-                             fix="give the path of an existing profile file (relative to the campaign file)")
-        if isinstance(line, float) and line.is_integer():
-            line = int(line)
-        spec = cls(kind="file", path=str(p), units=units, sha256=file_sha256(p), cutoff=cutoff, where=where,
-                   axis=axis, line=line, direction=direction)
-        if axis is not None or line is not None:
-            from interphase.surface.instruments import parse_line, read_scan
-
-            scan = read_scan(p, units)
-            _, Z = scan.lines(axis or "x")
-            if line is not None:
-                parse_line(line, Z.shape[0], f"{where}.line ({p})")
-        return spec
 
     def param(self, name: str) -> float:
         return dict(self.params)[name]
@@ -165,7 +140,7 @@ class ProfileSpec:
 
     def label(self) -> str:
         if self.kind == "file":
-            out = Path(self.path).stem
+            out = PurePath(self.path).stem
             if self.axis is not None or self.line is not None:
                 out += f"-{self.axis or 'x'}{str(self.line).replace('/', 'of') if self.line is not None else ''}"
             return out + ("-rev" if self.direction == "-" else "")

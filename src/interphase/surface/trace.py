@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from interphase.errors import InputError
-from interphase.surface.profiles import Profile
+from interphase.surface.base import Profile
 
 #: default grid: D50/2000 keeps θa of the docs/methods.md saw-tooth table within 0.035° (D50/500: 0.13°);
 #: long profiles coarsen it so that N·K stays under WORK_BUDGET shifts, never coarser than D50/200
