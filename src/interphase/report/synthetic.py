@@ -103,7 +103,7 @@ def synthetic_restore(campaign_path, folder, seed: int = 0, scatter_deg: float =
     from interphase.campaign.schema import load_campaign
     from interphase.errors import InputError
     from interphase.surface.normals import theta_a
-    from interphase.surface.profiles import from_spec
+    from interphase.surface.builder import from_spec
 
     campaign = load_campaign(campaign_path)
     rng = np.random.default_rng(seed)
