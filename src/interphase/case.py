@@ -5,7 +5,8 @@ canonical JSON plus the engine's name and recipe id (Engine.recipe_id): floats c
 repr of the round-tripped value, keys sorted (signac style).
 
 Geometry: the soil box is `box_length_d50` × `box_height_d50` (D50 units) in the x–z plane, quasi-2D
-(one grain layer in y). For `test = "interface"` the rough surface (profile) slides in x beneath
+(one grain layer in y), except in the 3D device (`device = "periodic3d"`, docs/3d.md): periodic in x
+and y, `box_depth_d50` deep in y, grains filling the depth, the profile extruded over it. For `test = "interface"` the rough surface (profile) slides in x beneath
 the soil held in the box; for `test = "box"` a direct shear box of two halves is sheared on the
 mid-height plane (no profile).
 """
@@ -26,7 +27,7 @@ from interphase.surface.spec import ProfileSpec
 TESTS = ("interface", "box")
 #: the named preparation states → Case.preparation (docs/soils.md gives the solid fraction each reaches)
 PREPARATIONS = {"dense": 0.0, "medium": 0.3, "loose": 1.0}
-DEVICES = ("walled", "periodic")
+DEVICES = ("walled", "periodic", "periodic3d")
 WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each side wall (Case.window)
 
 
@@ -78,7 +79,11 @@ class Case:
                                             # (restored for the shear): 0 the densest, 1 the grains'
                                             # own (the loosest this protocol makes); names in PREPARATIONS
     device: str = "walled"                  # "walled": soil box between side walls (the study's);
-                                            # "periodic": x periodic over the box length, no side walls
+                                            # "periodic": x periodic over the box length, no side walls;
+                                            # "periodic3d": the same, also periodic in y over
+                                            # box_depth_d50, grains filling the depth (docs/3d.md)
+    box_depth_d50: float = 10.0             # the 3D cell's depth in y [D50] (periodic3d only; not in
+                                            # the identity of other devices)
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
     start: Start | None = None              # None: the engine's own lattice and consolidation; else
                                             # another run's consolidated specimen (set by the plan,
@@ -102,10 +107,16 @@ class Case:
             object.__setattr__(self, "friction_ps", self.friction_pw)
         if not isinstance(self.gradation, Gradation):
             bad("gradation", "gradation must be a Gradation")
+        if self.device != "periodic3d" and self.box_depth_d50 != 10.0:
+            bad("box_depth_d50", f"only the 3D device has a depth (device is {self.device!r})",
+                'use device = "periodic3d", or remove box_depth_d50')
+        if self.three_d and self.start is not None:
+            bad("start", "a 3D case cannot start from another engine's specimen (LIGGGHTS only, docs/3d.md)",
+                "remove specimen_from for 3D cases")
         if self.start is not None and not isinstance(self.start, Start):
             bad("start", f"must be a Start or None, got {self.start!r}", "set it with [campaign] specimen_from")
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
-                    "snapshot_every", "box_length_d50", "box_height_d50")
+                    "snapshot_every", "box_length_d50", "box_height_d50", "box_depth_d50")
         nonneg = ("friction_pp", "friction_ps", "friction_pw", "friction_side", "rolling_friction")
         for f in positive + nonneg + ("poisson", "restitution", "preparation"):
             v = getattr(self, f)
@@ -145,8 +156,18 @@ class Case:
     # ---- derived ---------------------------------------------------------------------------
     @property
     def periodic(self) -> bool:
-        """x periodic over the box length (no side walls)."""
-        return self.device == "periodic"
+        """x periodic over the box length (no side walls): the periodic and the 3D device."""
+        return self.device in ("periodic", "periodic3d")
+
+    @property
+    def three_d(self) -> bool:
+        """The 3D device: also periodic in y over `box_depth`, grains filling the depth."""
+        return self.device == "periodic3d"
+
+    @property
+    def box_depth(self) -> float:
+        """The 3D cell's depth in y [m] (box_depth_d50·D50); NaN for the quasi-2D devices."""
+        return self.box_depth_d50 * self.d50 if self.three_d else math.nan
 
     @property
     def box_length(self) -> float:
@@ -167,9 +188,9 @@ class Case:
 
     @property
     def thickness(self) -> float:
-        """Quasi-2D out-of-plane thickness t [m] that converts stress to force on the monolayer
-        (F = σ·L·t): one grain layer, t = D50. Both engines and the analysis use it."""
-        return self.d50
+        """Out-of-plane thickness t [m] that converts stress to force (F = σ·L·t): quasi-2D, one grain
+        layer, t = D50; the 3D device, its depth. Both engines and the analysis use it."""
+        return self.box_depth if self.three_d else self.d50
 
     @property
     def surface_margin(self) -> float:
@@ -226,8 +247,9 @@ class Case:
             if not f.compare:
                 continue
             v = getattr(self, f.name)
-            if (f.name == "start" and v is None) or (f.name == "preparation" and v == 1.0):
-                continue            # the usual start and preparation: no key, so every case id without them stays as it was
+            if (f.name == "start" and v is None) or (f.name == "preparation" and v == 1.0) \
+                    or (f.name == "box_depth_d50" and not self.three_d):
+                continue            # the usual start and preparation, a 2D device's depth: no key, so every case id without them stays as it was
             if isinstance(v, (ProfileSpec, Gradation, Start)):
                 v = v.canonical()
             elif isinstance(v, float):
@@ -240,7 +262,7 @@ class Case:
             return self.name
         surface = self.profile.label() if self.profile else "box"
         grading = "user" if self.gradation.sizes else self.gradation.name
-        test = f"{self.test}-periodic" if self.periodic else self.test
+        test = f"{self.test}-{self.device}" if self.periodic else self.test
         prep = "" if self.preparation == 1.0 else f"-prep{self.preparation:g}"
         return f"{test}-{surface}-mu{self.friction_ps:g}-{grading}{prep}-s{self.seed}"
 

@@ -112,9 +112,12 @@ class RunRecord:
     steps: Steps
     recipe: Recipe | None = None
     period: float | None = None  # [m] x period of a periodic device (contacts across it are unwrapped)
+    depth: float | None = None   # [m] y period of the 3D device (docs/3d.md); None: quasi-2D
 
     def to_json(self) -> str:
         data = dataclasses.asdict(self)
+        if data["depth"] is None:       # quasi-2D records stay as they were
+            del data["depth"]
         return json.dumps({"schema": SCHEMA, **data}, indent=1, allow_nan=False)
 
     @classmethod

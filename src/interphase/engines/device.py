@@ -16,6 +16,9 @@ frame).
     moves, the upper half (sides, left flange) is fixed; the flanges close the openings the
     slide uncovers.
 A servo platen holds σ·L·t on top of the soil (t = D50, the quasi-2D thickness).
+The 3D device (Case.three_d, docs/3d.md) is the periodic one made deep: also periodic in y over
+[−W/2, W/2] (W = Case.box_depth = t), grains on a 3D lattice filling it, every wall (surface,
+platen, the box test's floor) extruded over exactly that depth (`wall_reach` = W/2).
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import numpy as np
 
 from interphase.case import Case
 from interphase.errors import InputError
-from interphase.engines.packing import Packing, lattice_packing, start_packing
+from interphase.engines.packing import Packing, lattice_packing, lattice_packing_3d, start_packing
 from interphase.material import rayleigh_time, youngs_modulus
 from interphase.recipe import RECIPE, Recipe, RunRecord, Steps
 
@@ -59,12 +62,14 @@ class Device:
     steps: Steps
     periodic: bool = False             # x periodic over [x_lo, x_hi] = [0, L]
     bed: tuple[int, ...] = ()          # periodic box: grains (packing indices) frozen to the moving floor
+    depth: float | None = None         # 3D device: y periodic over [−depth/2, depth/2] [m]; None: quasi-2D
 
     shear_sign = 1
 
     def __post_init__(self):
-        for a in (self.packing.x, self.packing.z, self.packing.diameter):     # shared through the cache
-            a.flags.writeable = False
+        for a in (self.packing.x, self.packing.y, self.packing.z, self.packing.diameter):   # shared through the cache
+            if a is not None:
+                a.flags.writeable = False
 
     @property
     def test(self) -> str:
@@ -119,7 +124,7 @@ class Device:
         return RunRecord(engine=engine, test=self.test, dt=self.dt, shear_velocity=self.case.shear_velocity,
                          shear_sign=self.shear_sign, thickness=self.thickness, n_grains=self.n_grains,
                          platen_force=self.platen_force, window=self.window, steps=self.steps, recipe=self.recipe,
-                         period=self.case.box_length if self.periodic else None)
+                         period=self.case.box_length if self.periodic else None, depth=self.depth)
 
 
 def time_step(case: Case, recipe: Recipe = RECIPE) -> float:
@@ -215,14 +220,15 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     L, d50 = case.box_length, case.d50
     dt = time_step(case, recipe)
     bed: tuple[int, ...] = ()
+    lattice = lattice_packing_3d if case.three_d else lattice_packing
     if case.test == "interface":
         prof = case.surface()
         top, z_lo = float(prof.z.max()), float(prof.z.min()) - d_max
-        pack = lattice_packing(case, 0.0, L, top + 0.02 * d_max)
+        pack = lattice(case, 0.0, L, top + 0.02 * d_max)
         moving = _segments(prof.x, prof.z)
         window = (0.0, L, top + d_max)
     else:
-        pack = lattice_packing(case, 0.0, L, 0.0)
+        pack = lattice(case, 0.0, L, 0.0)
         lowest = np.isclose(pack.z, pack.z.min())
         bed = tuple(int(i) for i in np.flatnonzero(lowest))
         floor = float(np.min(pack.z[lowest] - pack.diameter[lowest] / 2)) - 0.01 * d50
@@ -235,12 +241,13 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     base += dz
     xs = np.linspace(L, 0.0, 2 * n + 1)        # right to left: the platen faces down
     zs = np.where(np.arange(2 * n + 1) % 2 == 1, base - h, base)
+    depth = case.box_depth if case.three_d else None
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * case.gradation.d_min,
-                  wall_reach=0.45 * d_max * 2, moving=moving, fixed=(), exits=None,
+                  wall_reach=0.45 * d_max * 2 if depth is None else depth / 2, moving=moving, fixed=(), exits=None,
                   platen=_segments(xs, zs), platen_com=(L / 2, base),
                   platen_force=case.normal_stress * L * case.thickness,
                   bounds=(0.0, L, z_lo, top), window=window, packing=pack,
-                  steps=step_counts(case, dt, recipe), periodic=True, bed=bed)
+                  steps=step_counts(case, dt, recipe), periodic=True, bed=bed, depth=depth)
 
 
 def _started(case: Case, lattice: Packing, platen_z: float) -> tuple[Packing, float]:

@@ -1,5 +1,8 @@
 """LIGGGHTS engine: the case's device (engines/device.py) → deck + data + STL files → `liggghts`.
 
+The 3D device (docs/3d.md) uses the periodic deck with y periodic too (`boundary p p f`), no
+y-fixing of grains, meshes extruded over exactly the cell's depth.
+
 Grains crossing the exit planes are deleted (fix massflow/mesh) and counted in balance.txt. Contact
 law: Hertz, tangential history, Hertz damping from case.restitution, and the `epsd2` rolling model
 (elastic–plastic, kr = kt·R_eff², cap μr·R_eff·Fn), not `cdt` (a constant torque without static
@@ -60,7 +63,9 @@ def deck_values(dev: Device) -> dict:
     # (keys only when prepared: every other deck and engine.json stays as it was, and so do case ids)
     prepared = dict(prep_friction=[prep * friction[0], *friction[1:]],
                     prep_rolling=[prep * rolling[0], *rolling[1:]]) if prep != 1.0 else {}
-    return dict(**prepared, periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
+    # (keys only in 3D: every quasi-2D deck and engine.json stays as it was)
+    deep = dict(three_d=True, depth=dev.depth) if dev.depth is not None else {}
+    return dict(**prepared, **deep, periodic=dev.periodic, meshes=[moving, *([fixed] if dev.fixed else []), "platen"],
                 moving_file=f"{dev.wall_names[0]}.stl",
                 bed=[i + 1 for i in dev.bed],                                  # LIGGGHTS atom ids
         version=__version__, title="interface_shear" if case.test == "interface" else "direct_shear",
@@ -84,7 +89,8 @@ class Liggghts(Engine):
         dev = device(case, self.recipe)
         values = deck_values(dev)
         x_lo, x_hi, z_lo, z_hi = dev.bounds
-        box = (x_lo, x_hi, -case.gradation.d_max, case.gradation.d_max, z_lo, z_hi)
+        y_reach = case.gradation.d_max if dev.depth is None else dev.depth / 2     # 3D: the y period
+        box = (x_lo, x_hi, -y_reach, y_reach, z_lo, z_hi)
         # engine.json: the deck's values as data, for people and scripts (the readers use recipe.json)
         meta = values | dict(thickness=dev.thickness, n_grains=dev.n_grains, shear_sign=dev.shear_sign)
         return {"in.deck": environment(self.templates).get_template(self.template_name(case)).render(**values),

@@ -1,4 +1,5 @@
-"""Initial grain packing of a Case, engine-neutral: a loose monolayer in the x–z plane (y = 0).
+"""Initial grain packing of a Case, engine-neutral: a loose monolayer in the x–z plane (y = 0), or
+for the 3D device (Case.three_d) a loose body-centred lattice filling the cell's depth in y.
 
 Grains are drawn from the case's gradation (seeded) and laid on a staggered lattice of pitch
 1.02·d_max inside the soil region, lowest row just above the surface's highest point; the engine
@@ -24,6 +25,7 @@ class Packing:
     z: np.ndarray
     diameter: np.ndarray
     top: float           # highest grain top [m]
+    y: np.ndarray | None = None   # 3D packings: centres in y [m]; None: the monolayer at y = 0
 
     @property
     def n(self) -> int:
@@ -34,6 +36,9 @@ def grain_count(case: Case) -> int:
     """n_grains, or enough grains to fill box_length × box_height at a 2D solid fraction of ~0.82."""
     if case.n_grains is not None:
         return case.n_grains
+    if case.three_d:        # 3D: box_length × box_depth × box_height at a solid fraction of ~0.6
+        volume = case.box_length * case.box_depth * case.box_height
+        return max(2, int(round(0.6 * volume / (math.pi * case.d50 ** 3 / 6))))
     area = case.box_length * case.box_height
     d = case.d50
     return max(2, int(round(0.82 * area / (math.pi * d * d / 4))))
@@ -54,6 +59,32 @@ def lattice_packing(case: Case, x_min: float, x_max: float, z_floor: float) -> P
     x = x_min + pitch * (col + 0.5 + 0.5 * (row % 2)) + rng.uniform(-0.01, 0.01, n) * pitch
     z = z_floor + pitch * (0.5 + row * math.sqrt(3) / 2)
     return Packing(x, z, d, float(np.max(z + d / 2)))
+
+
+def lattice_packing_3d(case: Case, x_min: float, x_max: float, z_floor: float) -> Packing:
+    """Grains in x ∈ [x_min, x_max], y ∈ [−W/2, W/2] (W = Case.box_depth, periodic), layers upward
+    from z_floor [m]: a body-centred lattice of pitch 1.02·d_max in x and y, odd layers shifted
+    half a pitch in both, layer spacing 0.72·pitch (no two grains touch, across the y boundary
+    neither)."""
+    rng = np.random.default_rng(case.seed)
+    n = grain_count(case)
+    d = case.gradation.sample(n, rng)
+    pitch = 1.02 * case.gradation.d_max
+    depth = case.box_depth
+    per_x = int(math.floor((x_max - x_min) / pitch - 0.5))
+    per_y = int(math.floor(depth / pitch - 0.5))
+    if per_x < 2 or per_y < 2:
+        raise InputError(f"the 3D cell ({x_max - x_min:.4g} × {depth:.4g} m) holds fewer than two grains in x or y",
+                         where="case.box_depth_d50" if per_y < 2 else "case.box_length_d50",
+                         fix="make the cell at least 3 D50 long and 3 D50 deep")
+    k = np.arange(n)
+    layer, rest = k // (per_x * per_y), k % (per_x * per_y)
+    row, col = rest // per_x, rest % per_x
+    shift = 0.5 * (layer % 2)
+    x = x_min + pitch * (col + 0.5 + shift) + rng.uniform(-0.01, 0.01, n) * pitch
+    y = -depth / 2 + pitch * (row + 0.5 + shift) + rng.uniform(-0.01, 0.01, n) * pitch
+    z = z_floor + pitch * (0.5 + 0.72 * layer)
+    return Packing(x, z, d, float(np.max(z + d / 2)), y)
 
 
 def start_packing(case: Case) -> tuple[Packing, float]:
@@ -86,7 +117,8 @@ def write_liggghts_data(p: Packing, density: float, box: tuple[float, ...]) -> s
     head = (f"interphase-dem grains\n\n{p.n} atoms\n4 atom types\n\n"
             f"{xlo!r} {xhi!r} xlo xhi\n{ylo!r} {yhi!r} ylo yhi\n{zlo!r} {zhi!r} zlo zhi\n\nAtoms\n\n")
     ids = np.arange(1, p.n + 1)
-    table = np.column_stack([ids, np.ones(p.n), p.diameter, np.full(p.n, density), p.x, np.zeros(p.n), p.z])
+    table = np.column_stack([ids, np.ones(p.n), p.diameter, np.full(p.n, density), p.x,
+                             np.zeros(p.n) if p.y is None else p.y, p.z])
     buf = io.StringIO()
     np.savetxt(buf, table, fmt=["%d", "%d", "%.12g", "%.12g", "%.12g", "%.12g", "%.12g"])
     return head + buf.getvalue()

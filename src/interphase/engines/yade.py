@@ -21,6 +21,7 @@ from interphase.case import Case
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device
 from interphase.engines.render import environment
+from interphase.errors import InputError
 from interphase.material import youngs_modulus
 from interphase.recipe import FILE as RECIPE_FILE
 from interphase.recipe import RECIPE
@@ -104,6 +105,9 @@ class Yade(Engine):
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
+        if case.three_d:
+            raise InputError("the 3D device (periodic3d) runs in LIGGGHTS only for now", where="case.device",
+                             fix='run it with engine = "liggghts" (docs/3d.md says what is not done yet)')
         dev = device(case, self.recipe)
         # a prepared specimen (Case.preparation < 1) runs engines/yade_prepare.py's driver; every other
         # case's driver.py and params.json stay as they were (and so do their ids)
