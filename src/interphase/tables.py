@@ -26,6 +26,10 @@ CONTACT_COLUMNS = (
     "cx", "cz", "nx", "nz", "fn", "ft", "fx", "fz",
     "x1", "z1", "x2", "z2", "overlap",
 )
+#: the 3D device's extra contact columns (docs/3d.md): contact point y, normal y, force y, centres' y.
+#: With them nx, ny, nz are the 3D unit normal (the 2D functions, which renormalise (nx, nz), see its
+#: projection on the x–z plane), fn = f·n in 3D and ft the in-plane f·t̂, t̂ = (−nz, 0, nx)/|(nx, nz)|.
+CONTACT_COLUMNS_3D = ("cy", "ny", "fy", "y1", "y2")
 HISTORY_COLUMNS = (
     "time", "shear_disp", "surface_fx", "surface_fz", "normal_force", "platen_z", "n_contacts",
     "window_fx", "window_fz",

@@ -25,6 +25,12 @@ Simulations that move the surface +x are mirrored first (`apply_shear_sign(df, -
 Angles: radians ccw from +x inside; outputs name the reading: `*_deg` = ψ (degrees from vertical,
 positive toward −x, in [−90°, 90°)), `*_ccw_deg` = θ (degrees ccw from +x, in [0°, 180°)).
 
+3D (the periodic3d device, docs/3d.md): a ContactTable with ny and fy (tables.CONTACT_COLUMNS_3D)
+gets `surface_anisotropy`'s 3D path: the 3D tensors R, φ and Nf, read in the shear plane through
+their x–z blocks scaled to unit trace (identical to the 2D readings when nothing has a y part),
+with the out-of-plane part stated (R_yy, Σ|fy|/Σ|f|, the major axis's tilt out of plane, φ_yy,
+Nf_yy). The 2D functions are unchanged.
+
 Degenerate input never raises: rows with a non-finite value or a zero normal are dropped (counted in
 `n_dropped`); a group with fewer than MIN_CONTACTS contacts, zero forces, f0 ≤ 0 or a fabric too
 anisotropic for the second-order model (a ≥ 1, some g ≤ 0) gives NaN and says why in `reason`.
@@ -241,6 +247,108 @@ def resultant_direction(fx, fz, group=None, keys=None) -> pd.DataFrame:
     return out
 
 
+# ---- 3D (the periodic3d device, docs/3d.md) ----------------------------------------------------
+
+def _stack3(inv, k, w, ax, ay, az, S):
+    """Per-group 3×3 tensors Σ w·a⊗a / S, shape (k, 3, 3)."""
+    comps = (ax, ay, az)
+    T = np.empty((k, 3, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for i in range(3):
+            for j in range(i, 3):
+                T[:, i, j] = T[:, j, i] = _gsum(inv, k, w * comps[i] * comps[j]) / S
+    return T
+
+
+def _in_plane(T):
+    """(x11, z22, xz12) of the x–z block of 3×3 tensors, scaled to unit trace: the in-plane reading
+    of a 3D tensor, which for tensors with no y part is the 2D tensor itself."""
+    tr = T[:, 0, 0] + T[:, 2, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return T[:, 0, 0] / tr, T[:, 2, 2] / tr, T[:, 0, 2] / tr
+
+
+def _tilt_out_of_plane(T, bad):
+    """Angle [deg] of each tensor's major principal axis out of the x–z plane (asin |v_y|)."""
+    out = np.full(T.shape[0], np.nan)
+    good = ~bad & np.all(np.isfinite(T), axis=(1, 2))
+    if good.any():
+        _, vec = np.linalg.eigh(T[good])
+        out[good] = np.degrees(np.arcsin(np.clip(np.abs(vec[:, 1, -1]), 0.0, 1.0)))
+    return out
+
+
+def resultant_direction_3d(fx, fy, fz, group=None, keys=None) -> pd.DataFrame:
+    """θr of the average contact resultant force in 3D: R = Σ f⊗f/|f| / Σ|f| (3×3, trace 1).
+    In the shear plane: θr = dir and ar = aniso of R's x–z block scaled to unit trace (with fy = 0
+    exactly `resultant_direction`'s). Out of plane: r_yy = R_yy, the share of Σ|f| the tensor puts
+    along y (Σ fy²/|f| / Σ|f|); fy_share = Σ|fy| / Σ|f|; principal_tilt_y_deg, the major principal
+    axis's angle out of the x–z plane. Σfx, Σfy, Σfz and ψF = atan2(−Σfx, Σfz) as in 2D."""
+    fx, fy, fz = (np.asarray(a, dtype=float) for a in (fx, fy, fz))
+    keys, inv = _grouping(fx.size, group, keys)
+    k = keys.size
+    ok = np.isfinite(fx) & np.isfinite(fy) & np.isfinite(fz)
+    dropped = _gsum(inv, k, ~ok).astype(int)
+    inv, fx, fy, fz = inv[ok], fx[ok], fy[ok], fz[ok]
+    count = np.bincount(inv, minlength=k)
+    mag = np.sqrt(fx * fx + fy * fy + fz * fz)
+    inv_mag = np.divide(1.0, mag, out=np.zeros_like(mag), where=mag > 0)
+    S = _gsum(inv, k, mag)
+    R = _stack3(inv, k, inv_mag, fx, fy, fz, S)
+    r11, r22, r12 = _in_plane(R)
+    sfx, sfy, sfz = _gsum(inv, k, fx), _gsum(inv, k, fy), _gsum(inv, k, fz)
+    few = count < MIN_CONTACTS
+    zero = ~few & ~(S > 0)
+    bad = few | zero
+    nan = lambda v: np.where(bad, np.nan, v)   # noqa: E731
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fy_share = _gsum(inv, k, np.abs(fy)) / S
+    th = nan(direction(r11, r22, r12))
+    reasons = _join(np.where(few, f"fewer than {MIN_CONTACTS} usable contacts", ""),
+                    np.where(zero, "all contact forces are zero", ""),
+                    np.where(dropped > 0, np.char.add(dropped.astype(str), " row(s) with NaN force dropped"), ""))
+    out = _frame(keys, dict(n_contacts=count, ar=nan(aniso(r11, r22, r12)), theta_r=th, r_yy=nan(R[:, 1, 1]),
+                            fy_share=nan(fy_share), principal_tilt_y_deg=_tilt_out_of_plane(R, bad),
+                            sum_fx=nan(sfx), sum_fy=nan(sfy), sum_fz=nan(sfz),
+                            force_angle_deg=nan(np.degrees(np.arctan2(-sfx, sfz)))), reasons)
+    _angles(out, "theta_r", th)
+    return out
+
+
+def normal_tensors_3d(nx, ny, nz, fn, group=None, keys=None) -> pd.DataFrame:
+    """The 3D surface fabric φ = Σ n⊗n / N and force-weighted normal tensor Nf = Σ fn n⊗n / Σ fn
+    (compressive contacts). In-plane readings from their x–z blocks scaled to unit trace (a, θfabric;
+    an, θn: with ny = 0 exactly the 2D fabric and `force_weighted_normals`), out of plane their yy
+    components (fabric_yy, nf_yy)."""
+    nx, ny, nz, fn = (np.asarray(a, dtype=float) for a in (nx, ny, nz, fn))
+    norm = np.sqrt(nx * nx + ny * ny + nz * nz)
+    ok = np.isfinite(norm) & (norm > 0) & np.isfinite(fn)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nx, ny, nz = nx / norm, ny / norm, nz / norm
+    keys, inv = _grouping(nx.size, group, keys)
+    k = keys.size
+    inv, nx, ny, nz, fn = inv[ok], nx[ok], ny[ok], nz[ok], fn[ok]
+    count = np.bincount(inv, minlength=k)
+    phi = _stack3(inv, k, np.ones_like(nx), nx, ny, nz, count.astype(float))
+    comp = fn > 0
+    ncomp = np.bincount(inv[comp], minlength=k)
+    S = _gsum(inv[comp], k, fn[comp])
+    Nf = _stack3(inv[comp], k, fn[comp], nx[comp], ny[comp], nz[comp], S)
+    few, bad_n = count < MIN_CONTACTS, (ncomp < MIN_CONTACTS) | ~(S > 0)
+    p11, p22, p12 = _in_plane(phi)
+    n11, n22, n12 = _in_plane(Nf)
+    th_f = np.where(few, np.nan, direction(p11, p22, p12))
+    th_n = np.where(bad_n, np.nan, direction(n11, n22, n12))
+    out = _frame(keys, dict(a=np.where(few, np.nan, aniso(p11, p22, p12)), theta_fabric=th_f,
+                            fabric_yy=np.where(few, np.nan, phi[:, 1, 1]),
+                            an=np.where(bad_n, np.nan, aniso(n11, n22, n12)), theta_n=th_n,
+                            nf_yy=np.where(bad_n, np.nan, Nf[:, 1, 1])),
+                 np.where(bad_n, f"fewer than {MIN_CONTACTS} contacts with a compressive normal force", ""))
+    _angles(out, "theta_fabric", th_f)
+    _angles(out, "theta_n", th_n)
+    return out
+
+
 # ---- binning method -------------------------------------------------------------------------
 
 def binned_method(nx, nz, fn, ft, weight=None, bins: int = BINS) -> dict:
@@ -313,6 +421,8 @@ def surface_anisotropy(contacts: pd.DataFrame, snapshots=None, shear_sign: int =
     lee_share (share of Σ|f| on lee-side contacts, `_lee_share`), stress_ratio = ΣFx/Σ(−Fz) with
     F = −f the force on the surface, reason."""
     require_columns(contacts, ("snapshot", "kind", "nx", "nz", "fn", "ft", "fx", "fz"))
+    if "ny" in contacts.columns and "fy" in contacts.columns:
+        return _surface_anisotropy_3d(contacts, snapshots, shear_sign)
     keys = _snapshot_keys(contacts, snapshots)
     c = apply_shear_sign(contacts, shear_sign)
     c = c[c["kind"].eq("ps").to_numpy()]
@@ -337,11 +447,45 @@ def surface_anisotropy(contacts: pd.DataFrame, snapshots=None, shear_sign: int =
     return out
 
 
+#: the 3D surface table's out-of-plane columns (docs/3d.md)
+SURFACE_3D_COLUMNS = ("r_yy", "fy_share", "principal_tilt_y_deg", "fabric_yy", "nf_yy")
+
+
+def _surface_anisotropy_3d(contacts: pd.DataFrame, snapshots, shear_sign: int) -> pd.DataFrame:
+    """`surface_anisotropy` of a 3D ContactTable (columns ny, fy, tables.CONTACT_COLUMNS_3D): the
+    same columns, each the in-plane reading of the 3D tensor (θr, ar from R; θn, an from Nf; a,
+    θfabric from φ: x–z blocks scaled to unit trace), plus SURFACE_3D_COLUMNS, the out-of-plane part.
+    Mirroring (shear_sign −1) flips x only: ny and fy stay."""
+    keys = _snapshot_keys(contacts, snapshots)
+    c = apply_shear_sign(contacts, shear_sign)
+    c = c[c["kind"].eq("ps").to_numpy()]
+    snap = c["snapshot"].to_numpy()
+    res = resultant_direction_3d(c["fx"], c["fy"], c["fz"], snap, keys)
+    nrm = normal_tensors_3d(c["nx"], c["ny"], c["nz"], c["fn"], snap, keys)
+    out = pd.DataFrame(index=pd.Index(keys, name="snapshot"))
+    out["n_contacts"] = res["n_contacts"].to_numpy()
+    for col in ("ar", "theta_r", "theta_r_deg", "theta_r_ccw_deg", "force_angle_deg", "sum_fx", "sum_fz"):
+        out[col] = res[col].to_numpy()
+    for col in ("an", "theta_n", "theta_n_deg", "theta_n_ccw_deg", "a", "theta_fabric_deg"):
+        out[col] = nrm[col].to_numpy()
+    mag = np.sqrt(c["fx"].to_numpy(float) ** 2 + c["fy"].to_numpy(float) ** 2 + c["fz"].to_numpy(float) ** 2)
+    out["lee_share"] = _lee_share(c, snap, keys, res["theta_r"].isna().to_numpy(), mag)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["stress_ratio"] = -out["sum_fx"] / out["sum_fz"]
+    for col in ("r_yy", "fy_share", "principal_tilt_y_deg"):
+        out[col] = res[col].to_numpy()
+    for col in ("fabric_yy", "nf_yy"):
+        out[col] = nrm[col].to_numpy()
+    out["reason"] = _join(np.where(out["n_contacts"].to_numpy() == 0, "no particle–surface contacts", ""),
+                          res["reason"].to_numpy(), nrm["reason"].to_numpy())
+    return out
+
+
 #: a surface contact is on the lee side when its normal leans toward +x by more than the θa filter's 2°
 LEE_TILT = math.radians(2.0)
 
 
-def _lee_share(c: pd.DataFrame, snap, keys, undefined) -> np.ndarray:
+def _lee_share(c: pd.DataFrame, snap, keys, undefined, mag=None) -> np.ndarray:
     """Per snapshot, the share of Σ|f| over 'ps' contacts carried by lee-side contacts: normal
     tilted toward +x (ψn < −2°), i.e. on faces the soil moves away from. A lee force nearly
     orthogonal to the resisting faces' ones turns the axes of R (axial, force-weighted) little but
@@ -349,7 +493,8 @@ def _lee_share(c: pd.DataFrame, snap, keys, undefined) -> np.ndarray:
     s this share; friction tilts real forces off that ideal (docs/liggghts.md: θr vs δ). NaN where
     θr is undefined."""
     nx, nz = c["nx"].to_numpy(float), c["nz"].to_numpy(float)
-    mag = np.hypot(c["fx"].to_numpy(float), c["fz"].to_numpy(float))
+    if mag is None:         # 3D: |f| with its y part, given by the caller
+        mag = np.hypot(c["fx"].to_numpy(float), c["fz"].to_numpy(float))
     ok = np.isfinite(mag) & np.isfinite(nx) & np.isfinite(nz)
     with np.errstate(invalid="ignore"):
         lee = ok & (nx > math.sin(LEE_TILT) * np.hypot(nx, nz))

@@ -24,6 +24,10 @@ from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 SURFACE_KEYS = {"theta_r_surface_deg": "theta_r_deg", "theta_n_surface_deg": "theta_n_deg", "a_r_surface": "ar",
                 "a_n_surface": "an", "surface_force_angle_deg": "force_angle_deg", "lee_share_surface": "lee_share",
                 "stress_ratio_surface_contacts": "stress_ratio"}
+#: the 3D device's out-of-plane surface readings (docs/3d.md): row key → column of surface_anisotropy
+SURFACE_3D_KEYS = {"r_yy_surface": "r_yy", "fy_share_surface": "fy_share",
+                   "principal_tilt_y_surface_deg": "principal_tilt_y_deg", "fabric_yy_surface": "fabric_yy",
+                   "nf_yy_surface": "nf_yy"}
 #: the region's stress readings: row key → column of stress.average_stress
 STRESS_KEYS = {"stress_ratio_region": "stress_ratio", "qp_region": "qp", "principal_stress_deg_region": "principal_deg"}
 #: the region's anisotropy: row key → column of anisotropy.region_anisotropy
@@ -166,6 +170,8 @@ def surface(case, contacts: pd.DataFrame, ps: PeakSnapshot) -> Surface:
     key = ps.key
     values = {k: _at(table, key, col) for k, col in SURFACE_KEYS.items()}
     values["n_contacts_surface"] = int(_at(table, key, "n_contacts")) if key is not None else 0
+    if getattr(case, "three_d", False):     # the out-of-plane part of the 3D tensors (docs/3d.md)
+        values |= {k: _at(table, key, col) for k, col in SURFACE_3D_KEYS.items()}
     why = _at(table, key, "reason") if key is not None else ps.why_none
     return Surface(values=values, reasons=_nan_reasons(values, SURFACE_KEYS, why or "undefined at the peak snapshot"),
                    table=table)
@@ -303,6 +309,8 @@ def solid_fraction(case, particles: pd.DataFrame, snapshot) -> float:
     if not (x1 > x0 and z1 > z0):
         return math.nan
     inside = (x > x0) & (x < x1) & (z > z0) & (z < z1)
+    if getattr(case, "three_d", False):     # 3D: volume of the grains over the slab's, the cell's depth
+        return float(4 / 3 * np.pi * np.sum(r[inside] ** 3) / ((x1 - x0) * (z1 - z0) * case.box_depth))
     return float(np.pi * np.sum(r[inside] ** 2) / ((x1 - x0) * (z1 - z0)))
 
 
@@ -401,6 +409,8 @@ def _series(hist, ratio, window, surf, stress, region_, snaps) -> pd.DataFrame:
         snap["surface_force_angle_deg"] = surf["force_angle_deg"]
         snap["lee_share_surface"] = surf["lee_share"]
         snap["stress_ratio_surface_contacts"] = surf["stress_ratio"]
+        if "r_yy" in surf.columns:      # 3D: the resultant tensor's out-of-plane share
+            snap["r_yy_surface"] = surf["r_yy"]
     if stress is not None:
         snap["stress_ratio_region"] = stress["stress_ratio"]
         snap["qp_region"] = stress["qp"]

@@ -8,6 +8,9 @@ wall/gran/local (fixed order in LIGGGHTS 3.8.0, docs/engines.md): pairs 1-3 cent
 21-23 contact point; walls 1-3 contact point, 4-6 particle centre, 7-9 mesh index, triangle id,
 particle id, 10-12 force on the particle, 19-20 area/overlap.
 
+3D device (recipe.json `depth`): contacts are unwrapped in y too and carry the columns
+tables.CONTACT_COLUMNS_3D; nx, nz are then components of the 3D unit normal (see `_contacts_3d`).
+
 Frame: the decks move the surface (lower box) in −x, so the engine frame is the analysis frame
 (shear_sign = +1, recipe.json). Mesh index 0 in wall/gran is the rough surface ('ps'); others 'pw'.
 """
@@ -25,7 +28,7 @@ import pyarrow.csv as pacsv
 
 from interphase.errors import InputError
 from interphase.recipe import read_record
-from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS, Results
+from interphase.tables import CONTACT_COLUMNS, CONTACT_COLUMNS_3D, HISTORY_COLUMNS, PARTICLE_COLUMNS, Results
 
 _BLOCK = re.compile(
     rb"ITEM: TIMESTEP\s+(\d+)\s+ITEM: NUMBER OF (?:ENTRIES|ATOMS)\s+(\d+)\s+ITEM: BOX BOUNDS[^\n]*\n"
@@ -93,7 +96,8 @@ def _meta(folder: Path) -> dict:
     rec = read_record(folder)
     start = folder / "shear_start.txt"
     n0 = int(float(start.read_text().split()[0])) if start.exists() else rec.steps.n_consolidate
-    return {"dt": rec.dt, "shear_velocity": rec.shear_velocity, "shear_start": n0, "period": rec.period}
+    return {"dt": rec.dt, "shear_velocity": rec.shear_velocity, "shear_start": n0, "period": rec.period,
+            "depth": rec.depth}
 
 
 def _cols(df: pd.DataFrame, prefix: str, first: int, last: int) -> np.ndarray:
@@ -127,6 +131,8 @@ def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -
         # boundary is between one body and the other's image, so bring body 2 to that image
         p2 = p2.copy()
         p2[:, 0] -= meta["period"] * np.round((p2[:, 0] - p1[:, 0]) / meta["period"])
+    if meta.get("depth"):
+        return _contacts_3d(df, prefix, meta, p1, p2, f2, id1, id2, kind, cpt)
     branch = p2 - p1
     nrm = np.hypot(branch[:, 0], branch[:, 2])
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -143,21 +149,47 @@ def _contacts_from_dump(df: pd.DataFrame, prefix: str, wall: bool, meta: dict) -
     }
 
 
+def _contacts_3d(df, prefix, meta, p1, p2, f2, id1, id2, kind, cpt) -> dict[str, np.ndarray]:
+    """The 3D device's contacts (docs/3d.md): body 2 brought to the image nearest body 1 in y too
+    (period = the cell's depth); n the 3D unit normal (nx, ny, nz), fn = f·n; ft the in-plane
+    tangential force, f·t̂ with t̂ = (−nz, 0, nx)/|(nx, nz)| (the 2D t when ny = 0); the 3D columns
+    cy, ny, fy, y1, y2 (tables.CONTACT_COLUMNS_3D) beside the 2D ones."""
+    p2 = p2.copy()
+    p2[:, 1] -= meta["depth"] * np.round((p2[:, 1] - p1[:, 1]) / meta["depth"])
+    branch = p2 - p1
+    nrm = np.linalg.norm(branch, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nx, ny, nz = (branch[:, i] / nrm for i in range(3))
+        ft = (-f2[:, 0] * nz + f2[:, 2] * nx) / np.hypot(nx, nz)
+    fx, fy, fz = f2[:, 0], f2[:, 1], f2[:, 2]
+    t = (df["timestep"].to_numpy() - meta["shear_start"]) * meta["dt"]
+    return {
+        "snapshot": df["timestep"].to_numpy(), "time": t, "shear_disp": t * meta["shear_velocity"], "kind": kind,
+        "id1": id1.astype(np.int64), "id2": id2.astype(np.int64),
+        "cx": cpt[:, 0], "cz": cpt[:, 2], "nx": nx, "nz": nz,
+        "fn": fx * nx + fy * ny + fz * nz, "ft": ft, "fx": fx, "fz": fz,
+        "x1": p1[:, 0], "z1": p1[:, 2], "x2": p2[:, 0], "z2": p2[:, 2],
+        "overlap": _cols(df, prefix, 20, 20)[:, 0],
+        "cy": cpt[:, 1], "ny": ny, "fy": fy, "y1": p1[:, 1], "y2": p2[:, 1],
+    }
+
+
 def read_contacts(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
     folder = Path(folder)
     meta = meta or _meta(folder)
     dumps = [(read_dump(folder / "contacts_pair.dump"), "c_pc", False),
              (read_dump(folder / "contacts_wall.dump"), "c_wc", True)]
     parts = [_contacts_from_dump(df, prefix, wall, meta) for df, prefix, wall in dumps if len(df)]
+    columns = list(CONTACT_COLUMNS) + (list(CONTACT_COLUMNS_3D) if meta.get("depth") else [])
     if not parts:
-        return pd.DataFrame({c: pd.Series(dtype=float) for c in CONTACT_COLUMNS})
+        return pd.DataFrame({c: pd.Series(dtype=float) for c in columns})
     cols = {c: np.concatenate([p[c] for p in parts]) for c in parts[0]}
     steps = np.unique(cols["snapshot"])
     cols["snapshot"] = np.searchsorted(steps, cols["snapshot"]).astype(np.int64)   # 0, 1, 2 … in time order
     order = np.lexsort((cols["id2"], cols["id1"], cols["kind"], cols["snapshot"]))
     cols = {c: v[order] for c, v in cols.items()}
     cols["kind"] = pd.Categorical.from_codes(cols["kind"], categories=["pp", "ps", "pw"])
-    return pd.DataFrame(cols)[list(CONTACT_COLUMNS)]
+    return pd.DataFrame(cols)[columns]
 
 
 def read_history(folder: str | Path, meta: dict | None = None) -> pd.DataFrame:
@@ -185,10 +217,13 @@ def read_particles(folder: str | Path, meta: dict | None = None) -> pd.DataFrame
         return pd.DataFrame({c: pd.Series(dtype=float) for c in PARTICLE_COLUMNS})
     steps = df["timestep"].to_numpy()
     t = (steps - meta["shear_start"]) * meta["dt"]
-    return pd.DataFrame({"snapshot": np.unique(steps, return_inverse=True)[1].astype(np.int64), "time": t,
-                         "shear_disp": t * meta["shear_velocity"], "id": df["id"].to_numpy().astype(np.int64),
-                         "x": df["x"].to_numpy(), "z": df["z"].to_numpy(), "vx": df["vx"].to_numpy(),
-                         "vz": df["vz"].to_numpy(), "radius": df["radius"].to_numpy()})[list(PARTICLE_COLUMNS)]
+    out = pd.DataFrame({"snapshot": np.unique(steps, return_inverse=True)[1].astype(np.int64), "time": t,
+                        "shear_disp": t * meta["shear_velocity"], "id": df["id"].to_numpy().astype(np.int64),
+                        "x": df["x"].to_numpy(), "z": df["z"].to_numpy(), "vx": df["vx"].to_numpy(),
+                        "vz": df["vz"].to_numpy(), "radius": df["radius"].to_numpy()})[list(PARTICLE_COLUMNS)]
+    if meta.get("depth") and "y" in df.columns:      # the 3D device's dump: y and vy too
+        out["y"], out["vy"] = df["y"].to_numpy(), df["vy"].to_numpy()
+    return out
 
 
 def read_folder(folder: str | Path) -> Results:
