@@ -63,7 +63,7 @@ def _mean_interval(values, quantity: str) -> tuple[float, float, float]:
 
 def _why_high(e, rows: pd.DataFrame, e_note: float) -> str:
     """Why an interface reads stronger than its soil's own test, from what was measured."""
-    walled = str(rows["device"].iloc[0]) != "periodic" if "device" in rows else True
+    walled = str(rows["device"].iloc[0]) not in ("periodic", "periodic3d") if "device" in rows else True
     if walled:
         return (f"E > {e_note:g}: the walled interface box's side walls confine the soil above a rough surface "
                 "beyond the box test's state (docs/strength.md)")

@@ -369,7 +369,7 @@ def results_tables(points: pd.DataFrame) -> list[Table]:
             notes.append(INTERVAL_NOTE)
         e = pd.to_numeric(g.get("efficiency", pd.Series(dtype=float)), errors="coerce")
         if (e > E_NOTE).any():
-            walls = "" if (g.get("device", pd.Series(dtype=str)) == "periodic").all() else (
+            walls = "" if g.get("device", pd.Series(dtype=str)).isin(["periodic", "periodic3d"]).all() else (
                 "; in the walled device the side walls confine the soil above a rough surface beyond the box "
                 "test's state")
             notes.append(f"{int((e > E_NOTE).sum())} case(s) with E > {E_NOTE:g}{walls} (docs/strength.md): see "
