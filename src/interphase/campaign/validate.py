@@ -45,16 +45,17 @@ def profile_spec(row, d50: float, folder: Path) -> dict:
 
 
 def simulate(table, card, seeds, *, output: Path, executor: str | None = None, jobs: int | None = None,
-             stream=None) -> pd.DataFrame:
+             stream=None, protocol: dict | None = None) -> pd.DataFrame:
     """DEM δ at the peak (seed ensemble, 95 % interval) per laboratory row: columns row,
-    delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds."""
+    delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds. `protocol`: the
+    interface cases' Case fields (default PROTOCOL)."""
     from interphase.api import ensembles
     from interphase.campaign.element import run_cases
 
     output = Path(output)
     from interphase.analysis.validation import row_friction
 
-    case = {"soil": str(Path(card.path).resolve()), **PROTOCOL}
+    case = {"soil": str(Path(card.path).resolve()), **(PROTOCOL if protocol is None else protocol)}
     groups = []
     for _, r in table.rows.iterrows():
         groups.append({"name": f"row{int(r['row'])}",
