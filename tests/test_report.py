@@ -11,6 +11,7 @@ import pytest
 
 from interphase.campaign.schema import load_campaign
 from interphase.cli import main
+from interphase.errors import InputError
 from interphase.report.build import report_from_summaries
 from interphase.report.synthetic import synthetic_summaries
 
@@ -110,6 +111,9 @@ def test_lab_comparison_table(synthetic_report):
     assert len(lab) == 6
     assert lab["δ predicted [°]"].notna().all() and lab["δ measured [°]"].notna().all()
     assert (lab["tan φμ [-]"].iloc[:4] == 0.1).all() and (lab["tan φμ [-]"].iloc[4:] == 0.2).all()
+    assert (lab["φ from"] == "the campaign's simulated soil").all()
+    err = lab["δ predicted [°]"] - lab["δ measured [°]"]
+    assert np.allclose(lab["error [°]"], err)
 
 
 def test_too_few_points_draw_and_say_no_fit(tmp_path):
@@ -129,19 +133,14 @@ def test_empty_index_still_writes_a_report(tmp_path):
 
 
 def test_bad_lab_file_names_the_column(tmp_path):
+    """The report reads the lab/ format (interphase.lab): a bad file fails before anything is written,
+    naming the file and the column."""
     bad = tmp_path / "lab.csv"
-    bad.write_text("theta_a_deg,material\n10,glass beads\n")
-    code = main(["report", str(ROOT / "campaigns" / "quick.toml"), "--out", str(tmp_path / "r"), "--lab", str(bad)]) \
-        if (ROOT / "runs" / "quick" / "index.sqlite").exists() else None
-    from interphase.errors import InputError
-    from interphase.report.lab import read_lab
-    with pytest.raises(InputError, match="tan_delta or an efficiency"):
-        read_lab(bad)
-    if code is not None:
-        assert code == 2
-    bad.write_text("theta_a_deg,tan_delta,material\n10,0.3,granite dust\n")
-    with pytest.raises(InputError, match="friction"):
-        read_lab(bad)
+    bad.write_text(LAB.read_text().replace("tan_delta_peak", "tan_delta_at_peak"))
+    out = tmp_path / "r"
+    with pytest.raises(InputError, match="delta_peak") as exc:
+        report_from_summaries(synthetic_summaries(3, seed=1), out, lab=bad, n_boot=0)
+    assert str(bad) in str(exc.value) and not out.exists()
 
 
 def test_cli_report_without_results_exit_2(tmp_path, capsys):

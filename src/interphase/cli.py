@@ -453,8 +453,8 @@ def _add_report(sub) -> None:
     p.add_argument("-o", "--output", "--out", dest="output", default=None, metavar="DIR",
                    help="the report folder to write (default: RUNS/report)")
     p.add_argument("--runs", default=None, metavar="DIR", help=RUNS_HELP)
-    p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
-                   "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
+    p.add_argument("--lab", default=None, help="laboratory CSV (lab/README.md: published tests with their surfaces' "
+                   "geometry) — overlaid on Fig. 6.10 and tabulated against the prediction and both baselines")
     p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
     p.add_argument("--animate", action="append", default=None, metavar="LABEL_OR_ID",
                    help="write only figures/animation_<label>.gif of this run (label or case id; repeatable): "

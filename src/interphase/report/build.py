@@ -226,6 +226,15 @@ def _curves(store, rows: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return out
 
 
+#: the lab comparison table: analysis.validation.predict_rows columns → headings
+LAB_COLUMNS = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]",
+               "theta_a_deg": "θa [°]", "friction": "tan φμ [-]", "phi_deg": "φ [°]", "phi_from": "φ from",
+               "delta_measured_deg": "δ measured [°]", "delta_predicted_deg": "δ predicted [°]",
+               "delta_lo_deg": "δ lo [°]", "delta_hi_deg": "δ hi [°]", "error_predicted_deg": "error [°]",
+               "error_soil_deg": "error, δ = φ [°]", "error_rule_deg": "error, δ = min(φμ + θa, φ) [°]",
+               "source": "source", "table_or_figure": "table or figure", "note": "note"}
+
+
 #: first in summaries.csv: a run's identity and physical case; then every other column of the index
 #: (Case parameters, the summary's own columns by their names, elapsed [s]) but its bookkeeping
 RUN_COLUMNS = ("case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
@@ -292,11 +301,11 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     """Everything `campaign report` writes, from a summaries table (CampaignStore.summaries() shape).
     `store` (for curves, networks, provenance) and `campaign` (input tables, Fig. 6.6) are optional."""
     out = Path(out)
-    lab_df = None
+    lab_table = None
     if lab is not None:            # a bad lab file fails before anything is written
-        from interphase.report.lab import read_lab
+        from interphase.lab import read_lab
 
-        lab_df = read_lab(lab)
+        lab_table = read_lab(lab)
     tdir, fdir = out / "tables", out / "figures"
     tdir.mkdir(parents=True, exist_ok=True)
     fdir.mkdir(parents=True, exist_ok=True)
@@ -344,18 +353,24 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         tables.append(T.Table("criterion_check", "The criterion θa → θr → E against every simulated case",
                               shown, check_notes(checks)))
     tables += T.findings_tables(points)
-    if lab_df is not None:
-        from interphase.report.lab import compare
+    lab_df = None
+    if lab_table is not None:
+        from interphase.analysis.validation import predict_rows
 
         fitted = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
         usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)
         if not usable:
             res.warnings.append("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to fit "
                                 "θa–θr and E–θr)")
-        camp_tp = fitted.tan_phi if math.isfinite(fitted.tan_phi) else None   # the campaign's own box tests
+        camp_tp = fitted.tan_phi if math.isfinite(fitted.tan_phi) else CriterionModel.study_defaults(0.0).tan_phi
         model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu, camp_tp))
-        tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle", compare(lab_df, model_for),
-                              ["δ = atan(tan δ); predicted tan δ = E·tan φ."]))
+        lab_df = predict_rows(lab_table, model_for, default_phi=(math.degrees(math.atan(camp_tp)),
+                                                                 "the campaign's simulated soil"))
+        tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle",
+                              lab_df[list(LAB_COLUMNS)].rename(columns=LAB_COLUMNS),
+                              ["δ = atan(E·tan φ); tan φ: the laboratory's own soil test where the file gives it, "
+                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ and "
+                               "δ = min(φμ + θa, φ) (docs/validation.md)."]))
     table_entries = []
     for i, t in enumerate(tables):
         paths = T.write_table(t, tdir, prov)
@@ -400,9 +415,7 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     if checks is not None:
         add("The criterion against every simulated case: δ predicted vs measured", F.criterion_check_figure(checks, fdir))
     if lab_df is not None:
-        tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").median()
-        tp = float(tp) if math.isfinite(tp) else CriterionModel.study_defaults(0.0).tan_phi
-        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir, tp))
+        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir))
     if store is not None:
         allrows = summaries.copy()
         allrows["group"] = allrows.get("group", "").astype(str)
