@@ -124,24 +124,26 @@ def test_rounds_add_seeds_only_where_the_interval_is_wide():
     r = replay(rule, {k: set() for k in values}, evaluate)
     assert {k: v.wanted for k, v in r.items()} == {"narrow": 3, "wide": 3, "noisy": 3}
     assert all(v.state == "waiting" for v in r.values())
-    # the first round finished: only the wide cases get a 4th seed
+    # the first round finished: the wide cases get a 4th seed, the narrow one too, its confirming round
     r = replay(rule, {k: {1, 2, 3} for k in values}, evaluate)
-    assert {k: (v.wanted, v.state) for k, v in r.items()} == {"narrow": (3, "reached"), "wide": (4, "adding"),
+    assert {k: (v.wanted, v.state) for k, v in r.items()} == {"narrow": (4, "confirming"), "wide": (4, "adding"),
                                                               "noisy": (4, "adding")}
     assert r["narrow"].halfwidth <= 0.05 < r["wide"].halfwidth
-    # every seed finished: the rounds replay to the same stops; the wide case reaches the target at
-    # 6 seeds (± 0.040; ± 0.053 at 5), the noisy one stops at the cap
+    # every seed finished: the rounds replay to the same stops; the narrow case stops after its
+    # confirming round, the wide one reaches the target at the cap, 6 seeds (± 0.040; ± 0.053 at
+    # 5), the noisy one stops at the cap
     r = replay(rule, {k: set(range(1, 7)) for k in values}, evaluate)
     assert {k: (v.wanted, v.n, v.state) for k, v in r.items()} == {
-        "narrow": (3, 3, "reached"), "wide": (6, 6, "reached"), "noisy": (6, 6, "capped")}
+        "narrow": (4, 4, "reached"), "wide": (6, 6, "reached"), "noisy": (6, 6, "capped")}
     # a case waiting on a run is not judged and does not hold the others back
     r = replay(rule, {"narrow": {1, 2, 3}, "wide": {1, 2, 3, 5}, "noisy": set(range(1, 7))}, evaluate)
     assert (r["wide"].wanted, r["wide"].state, r["wide"].finished) == (4, "adding", 4)
-    assert r["noisy"].state == "capped"
+    assert r["noisy"].state == "capped" and r["narrow"].state == "confirming"
     # step 2: seeds come two at a time, never beyond the cap
     r = replay(SeedRule(3, 6, 2, "tan_delta", 0.05), {k: set(range(1, 6)) for k in values}, evaluate)
     assert (r["wide"].n, r["wide"].wanted, r["wide"].state) == (5, 6, "adding")      # judged at 3 and 5
     assert (r["noisy"].n, r["noisy"].wanted) == (5, 6)
+    assert (r["narrow"].n, r["narrow"].wanted, r["narrow"].state) == (5, 5, "reached")   # 3, then 5 to confirm
 
 
 def test_cap_notes_name_only_the_cases_that_stopped_at_the_cap():
@@ -166,8 +168,9 @@ def _status(f: Path) -> dict:
 @pytest.mark.liggghts
 def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
     """Two physical cases with E as the target. Round 1 (seeds 1–2, cap 2) gives each its E interval;
-    then the target is set between the two half-widths and the cap raised to 3: only the wider case
-    (and its soil test of seed 3) runs again, nothing finished is rerun, and a rerun runs nothing."""
+    then the target is set between the two half-widths and the cap raised to 4: the narrow case runs
+    its one confirming seed (3) and stops, the wide one goes on to seed 4 (with its soil test of each
+    seed); nothing finished is rerun, and a rerun runs nothing."""
     need_binary("liggghts")
     f = tmp_path / "seq.toml"
     f.write_text(BASE + SEEDS.format(max=2, h=1e-9))
@@ -181,17 +184,18 @@ def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
     done_before = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
     assert len(done_before) == 6                   # 2 cases × 2 seeds + the 2 soil tests
 
-    f.write_text(BASE + SEEDS.format(max=3, h=(halves[wide] + halves[narrow]) / 2))
+    f.write_text(BASE + SEEDS.format(max=4, h=(halves[wide] + halves[narrow]) / 2))
     assert main(["run", str(f), "--plain"]) == 0
     status = _status(f)
     seeds = {r["case"]: r for r in status["seeds"]}
-    assert (seeds[narrow]["finished"], seeds[narrow]["wanted"], seeds[narrow]["state"]) == (2, 2, "reached")
-    assert (seeds[wide]["finished"], seeds[wide]["wanted"]) == (3, 3)
-    assert seeds[wide]["state"] in ("reached", "capped") and seeds[wide]["n"] == 3
-    labels = sorted(r["label"] for r in status["cases"])
-    assert [lb for lb in labels if lb.endswith("-s3")] == sorted(
-        [f"{wide}-s3", "box-periodic-box-mu0.9-mono-s3"]), labels
+    assert (seeds[narrow]["finished"], seeds[narrow]["wanted"], seeds[narrow]["state"]) == (3, 3, "reached")
+    assert (seeds[wide]["finished"], seeds[wide]["wanted"], seeds[wide]["n"]) == (4, 4, 4)
+    assert seeds[wide]["state"] in ("reached", "capped")
+    labels = [r["label"] for r in status["cases"]]
+    box = "box-periodic-box-mu0.9-mono"
+    assert sorted(lb for lb in labels if lb.endswith("-s3")) == sorted([f"{wide}-s3", f"{narrow}-s3", f"{box}-s3"])
+    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{box}-s4"])
     after = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
-    assert len(after) == 8 and all(after[k] == v for k, v in done_before.items())   # nothing finished reran
+    assert len(after) == 11 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
     assert main(["run", str(f), "--plain"]) == 0                    # the rounds replay: nothing to run
     assert {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()} == after
