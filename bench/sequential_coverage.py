@@ -8,7 +8,11 @@ seeds; the case's "truth" is its full-data value (mean tan δ; E = mean tan δ /
 draws seeds one by one and applies the rule exactly as campaign run does: seeds 1..start, then +step
 while the 95 % interval's half-width (t interval for tan δ; analysis.ensemble.ratio_interval for E,
 the box side on max(10, n) seeds as [pairs] seeds = 1-10 and the paired seeds give) is wider than the
-target, up to max. Coverage = share of trials whose final 95 % interval contains the truth.
+target, up to max; once the half-width first reaches the target, one more round (campaign.sequential.
+CONFIRM) and stop there whatever the interval reads (rows "+1 after": the rule campaign run uses;
+rows without it: the plain rule, for comparison). Coverage = share of trials whose final 95 %
+interval contains the truth; "worst" the lowest case's coverage; "seeds" the mean seeds used;
+"reached" the share of trials stopping at the target rather than at the cap.
 
 Three ways of drawing a seed (the study has only 3 interface seeds per case):
   - normal: Normal(case mean, case sd) (the soil's from its 10 seeds). The fixed-n t interval is
