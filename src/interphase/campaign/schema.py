@@ -321,12 +321,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
 
     _check_case_keys(ctx, top_case, ("case",))
-    seed_rule = None
-    if "seeds" in data:
-        seed_rule = _seed_rule(ctx, data["seeds"], data.get("pairs", {}))
-        _no_seed_sweep(ctx, data, groups_raw)
-        seed_values = list(range(1, seed_rule.max + 1))
-        groups_spec = [(n, d, c, {**sw, "seed": seed_values}, z, gp) for n, d, c, sw, z, gp in groups_spec]
+    seed_rule, groups_spec = _with_seed_rule(ctx, data, groups_raw, groups_spec)
     groups: list[Group] = []
     gens: list[tuple] = []
     for gname, gdesc, gcase, sweep, zips, gpath in groups_spec:
@@ -396,6 +391,16 @@ def _seed_rule(ctx: _Ctx, table: dict, pairs: dict) -> SeedRule:
     extra = pairs.get("seeds", []) if isinstance(pairs, dict) else []
     extra = tuple(x for x in extra if isinstance(x, int)) if isinstance(extra, list) else ()
     return SeedRule(n["start"], n["max"], n["step"], q, float(h), extra)
+
+
+def _with_seed_rule(ctx: _Ctx, data: dict, groups_raw, groups_spec: list) -> tuple:
+    """(SeedRule or None, the groups with `seed = [1..max]` swept last when the file has [seeds])."""
+    if "seeds" not in data:
+        return None, groups_spec
+    rule = _seed_rule(ctx, data["seeds"], data.get("pairs", {}))
+    _no_seed_sweep(ctx, data, groups_raw)
+    values = list(range(1, rule.max + 1))
+    return rule, [(n, d, c, {**sw, "seed": values}, z, gp) for n, d, c, sw, z, gp in groups_spec]
 
 
 def _no_seed_sweep(ctx: _Ctx, data: dict, groups_raw) -> None:
