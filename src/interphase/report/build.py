@@ -312,6 +312,15 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     res = ReportResult(out)
     prov = provenance(store, summaries)
     ens, ens_table = ensemble_points(summaries, store, e_note=T.E_NOTE)
+    if campaign is not None and getattr(campaign, "seeds", None) is not None and ens_table is not None \
+            and not ens_table.empty:      # sequential seeds: which cases stopped at the cap, not the target
+        from interphase.campaign.sequential import cap_notes
+
+        cap = cap_notes(ens_table, campaign.seeds)
+        ens_table["note"] = ["; ".join(x for x in (a, b) if x) for a, b in zip(ens_table["note"].fillna(""), cap)]
+        if cap.ne("").any():
+            res.warnings.append(f"{int(cap.ne('').sum())} physical case(s) hit the seed cap ({campaign.seeds.max}) "
+                                f"before ± {campaign.seeds.halfwidth:g} in {campaign.seeds.quantity} (ensembles table)")
     points, runs = ens.points, ens.runs
     res.points, res.runs, res.ensemble = points, runs, ens
     n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0
