@@ -156,3 +156,71 @@ def calibrate(target: PathLike, *, quick: bool = False, card: PathLike | None = 
     from interphase.campaign.calibrate import calibrate as _calibrate
 
     return _calibrate(target, quick=quick, card_path=card, output=runs)
+
+
+#: shipped soil cards by a laboratory soil's name (soils/ of the source tree or the working folder)
+SHIPPED_CARDS = (("ottawa", "ottawa-20-30.toml"), ("glass", "glass-beads-0.7.toml"))
+
+
+def _shipped_card(soils):
+    """The one shipped card whose name matches every soil of a lab file, or None."""
+    found = set()
+    for soil in soils:
+        name = next((card for key, card in SHIPPED_CARDS if key in str(soil).lower()), None)
+        roots = (Path.cwd() / "soils", Path(__file__).resolve().parents[2] / "soils")
+        found.add(next((r / name for r in roots if name and (r / name).is_file()), None))
+    return found.pop() if len(found) == 1 else None
+
+
+def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = None, simulate: bool = False,
+             seeds: int = 3, output: PathLike | None = None, executor: str | None = None, jobs: int | None = None,
+             stream=None) -> dict:
+    """The criterion (and with `simulate`, the DEM on the soil card) against a laboratory file
+    (lab/README.md; docs/validation.md), as `campaign validate`. Returns a dict: table (DataFrame, one
+    row per test: δ measured, predicted with its interval, both baselines, errors [°]), skill
+    (DataFrame), largest_miss, notes, folder and files written (validation.csv, skill.csv,
+    validation.md, validation.png/.pdf under `output`, default runs/validate/<file name>)."""
+    from interphase.analysis.validation import largest_miss, predict_rows, skill
+    from interphase.errors import InputError
+    from interphase.lab import read_lab
+    from interphase.report.build import criterion_model
+    from interphase.report.validation import markdown, validation_figure
+    from interphase.soil import load_card
+
+    table = read_lab(lab)
+    out = Path(output) if output else Path("runs") / "validate" / table.path.stem
+    notes: list[str] = []
+    card = load_card(soil) if soil else None
+    if card is None:
+        shipped = _shipped_card(sorted(set(table.rows["soil"])))
+        card = load_card(shipped) if shipped else None
+        if card is not None:
+            notes.append(f"soil card: {card.path} (shipped, chosen by the soil's name; soil= to choose)")
+        elif simulate or table.rows["soil_phi_peak"].isna().any():
+            raise InputError(f"no single shipped card for the soils {', '.join(sorted(set(table.rows['soil'])))}",
+                             where="--soil", fix="give --soil soils/NAME.toml")
+    models: dict = {}
+    model_for = lambda mu: models[mu] if mu in models else models.setdefault(mu, criterion_model(mu, fit))
+    df = predict_rows(table, model_for, card)
+    notes += sorted({f"criterion: {m.source}" for m in models.values()})
+    if simulate:
+        from interphase.campaign.validate import simulate as _simulate, with_dem
+
+        df = with_dem(df, _simulate(table, card, range(1, int(seeds) + 1), output=out / "runs", executor=executor,
+                                    jobs=jobs, stream=stream))
+    sk = skill(df)
+    out.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out / "validation.csv", index=False)
+    sk.to_csv(out / "skill.csv", index=False)
+    cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
+            "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
+            "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
+            "delta_soil_deg": "δ = φ [°]"}
+    if "delta_dem_deg" in df:
+        cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
+    (out / "validation.md").write_text(markdown(df, cols) + "\n" + markdown(sk, {
+        "subset": "rows", "prediction": "prediction", "n": "n", "rms_deg": "rms [°]", "max_abs_deg": "max [°]",
+        "within_4": "share within 4°"}))
+    files = [out / "validation.csv", out / "skill.csv", out / "validation.md", *validation_figure(df, out)]
+    return {"lab": str(table.path), "rows": len(df), "folder": out, "notes": notes, "table": df, "skill": sk,
+            "largest_miss": largest_miss(df), "files": files}
