@@ -93,7 +93,7 @@ def summaries(campaign, *, runs: PathLike | None = None):
     report's tables/summaries.csv): the case's parameters (SI) and its summary (peak_stress_ratio,
     tan_delta-like ratios [-], theta_r_*_deg, shear_disp_at_peak [m], …), `pair_id` = its box
     test. Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     c = _campaign(campaign, runs)
     _, store, rows = open_campaign(c.path, c.output)
@@ -105,15 +105,10 @@ def ensembles(campaign, *, runs: PathLike | None = None):
     """One row per physical case (its seeds pooled): tan δ, tan φ and E at the peak and at the
     critical state, each with its 95 % interval and the number of seeds (the report's ensembles
     table; docs/methods.md). Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
-    from interphase.report.ensembles import ensemble_tables
+    from interphase.campaign.results import campaign_ensembles
 
     c = _campaign(campaign, runs)
-    _, store, rows = open_campaign(c.path, c.output)
-    try:
-        return ensemble_tables(rows, store)[0]
-    finally:
-        store.close()
+    return campaign_ensembles(c.path, c.output)
 
 
 def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,

@@ -355,25 +355,3 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
         if isinstance(value, int) and not isinstance(value, bool) and fields[key].type in ("float", float):
             kwargs[key] = float(value)
     return Case(**kwargs)
-
-
-def load_case_file(path) -> Case:
-    """The Case of a TOML file's [case] table (Case fields, SI units; a profile file's path is
-    relative to the TOML file). Every problem is an InputError naming the file."""
-    import tomllib
-    from pathlib import Path
-
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except FileNotFoundError:
-        raise InputError("file not found", where=str(path), fix="give a TOML file with a [case] table") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"TOML syntax error: {exc}", where=str(path)) from None
-    if "case" not in data or not isinstance(data["case"], dict):
-        raise InputError("no [case] table", where=str(path), fix="put the Case fields under [case]")
-    from interphase.campaign.checks import input_errors
-
-    case = case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
-    input_errors([case], where=f"{path}: [case]: case")
-    return case

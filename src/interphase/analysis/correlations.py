@@ -568,12 +568,12 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     states     optional {case_id: value}: each interface run's peak state and each box run's (the value
                its ensemble's peak averages, analysis.ensemble.seed_peak_states); without it each
                run's own peak stress ratio stands in.
-    ensembles  optional table of report.ensembles (group, case, tan_delta…, tan_phi…, E…): its tan δ,
+    ensembles  optional table of analysis.ensemble_table (group, case, tan_delta…, tan_phi…, E…): its tan δ,
                tan φ and E with their intervals replace the ones computed here (they agree when
                `states` came from the same curves), so each E carries its box test's interval.
     box_pools  optional {pair_id: every box test of that soil}: a case's box ensemble is the union of
                its pair_ids' pools, so soil tests run on more seeds than the interface cases
-               ([pairs] seeds) all count (report.ensembles.box_pools); without it, the pair_ids.
+               ([pairs] seeds) all count (analysis.ensemble_table.box_pools); without it, the pair_ids.
     Without `ensembles`, E's interval is that of a ratio of independent seed means
     (analysis.ensemble.ratio_interval), as analysis.ensemble.ensemble_efficiency."""
     runs = runs.copy().reset_index(drop=True)

@@ -6,7 +6,7 @@ bench/sequential_coverage.py, docs/methods.md "Sequential seeds"):
   - every physical case (a group's case label without its `-sN`, per engine) runs seeds 1..start;
   - a round ends when every run it asked for has finished; then each physical case whose seeds
     1..k have all finished (and their paired box tests, for E) is judged: its 95 % interval of the
-    target quantity, computed by the report's seed-ensemble code (report.ensembles.ensemble_tables
+    target quantity, computed by the report's seed-ensemble code (analysis.ensemble_table.ensemble_tables
     on exactly the runs of that round), has half-width h = (hi − lo)/2 [-]. The first time h ≤
     target the case runs one more round (`confirming`: seeds k+1..k+step) and then stops (`reached`)
     on that round's interval, whatever it reads; at k = max it stops (`capped`, or `reached` if
@@ -147,9 +147,9 @@ class _CachedCurves:
 
 
 def _evaluator(rule, summaries: pd.DataFrame, store):
-    """evaluate({key: k}) for `replay`: the report's ensembles table (report.ensembles) on the
+    """evaluate({key: k}) for `replay`: the report's ensembles table (analysis.ensemble_table) on the
     interface runs of seeds 1..k of each case, the box tests paired with them and the [pairs] seeds."""
-    from interphase.report.ensembles import ensemble_tables
+    from interphase.analysis.ensemble_table import ensemble_tables
 
     curves = _CachedCurves(store)
     s = summaries.assign(_key=[(str(e), str(g), physical_case(lb)) for e, g, lb in

@@ -1,4 +1,5 @@
-"""The report's seed-ensemble table: each physical case's tan δ, its paired box tests' tan φ and E,
+"""The seed-ensemble table (the report's `ensembles`, the sequential seeds' stopping rule, the
+validation's DEM δ): each physical case's tan δ, its paired box tests' tan φ and E,
 at the peak and at the critical state, each with its 95 % interval (analysis.ensemble).
 
 Intervals respect their quantity (analysis.ensemble.seed_interval): tan δ and tan φ on the log scale
