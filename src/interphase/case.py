@@ -261,6 +261,17 @@ def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
 
 
+
+def physical_id(case: Case, length: int = 12) -> str:
+    """Short hash of the PHYSICAL case: the canonical inputs without the packing seed, the start
+    reduced to the engine whose specimen it takes (the source run's id carries its seed). Every seed
+    of one physical case has it, whatever engine or recipe runs it: what seed ensembles pool by."""
+    inputs = case.canonical()
+    inputs.pop("seed", None)
+    if "start" in inputs:
+        inputs["start"] = {"engine": inputs["start"]["engine"]}
+    return hashlib.sha256(canonical_json({"physical_case": inputs}).encode()).hexdigest()[:length]
+
 #: Case fields the plan sets, never a campaign's [case] table → what to write instead
 PLANNED_FIELDS = {"start": 'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"'}
 

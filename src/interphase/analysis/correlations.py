@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-from interphase.analysis.ensemble import MIN_SEEDS, physical_case, ratio_interval, seed_interval
+from interphase.analysis.ensemble import MIN_SEEDS, physical_case, physical_ids, ratio_interval, seed_interval
 
 MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
@@ -426,6 +426,7 @@ def prepare_points(summaries: pd.DataFrame) -> pd.DataFrame:
         pts["theta_r_over_theta_a"] = np.where(pts["theta_a_deg_90"] > 0,
                                                pts["theta_r_surface_deg"] / pts["theta_a_deg_90"], np.nan)
     pts["physical_case"] = _col(pts, "label", "").map(physical_case) if len(pts) else pd.Series(dtype=str)
+    pts["physical_id"] = physical_ids(pts) if len(pts) else pd.Series(dtype=str)
     return pts.reset_index(drop=True)
 
 
@@ -579,11 +580,12 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     runs = runs.copy().reset_index(drop=True)
     if "physical_case" not in runs:
         runs["physical_case"] = _col(runs, "label", "").map(physical_case)
+    runs["physical_id"] = physical_ids(runs) if len(runs) else pd.Series(dtype=str)
     if "group" not in runs:
         runs["group"] = ""
     runs["group"] = runs["group"].astype(str)
-    keys = runs[["group", "physical_case"]].astype(str)
-    names = keys.drop_duplicates().sort_values(["group", "physical_case"]).reset_index(drop=True)
+    keys = runs[["group", "physical_case", "physical_id"]].astype(str)     # pooled by id, ordered by name
+    names = keys.drop_duplicates().sort_values(["group", "physical_case", "physical_id"]).reset_index(drop=True)
     k = len(names)
     code_of = {tuple(r): i for i, r in enumerate(names.itertuples(index=False, name=None))}
     codes = np.array([code_of[tuple(r)] for r in keys.itertuples(index=False, name=None)], dtype=int)
@@ -657,9 +659,10 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     lo, hi = np.where(few, np.nan, lo), np.where(few, np.nan, hi)
     pts["efficiency_lo"], pts["efficiency_hi"] = (np.where(has, lo, np.nan), np.where(has, hi, np.nan)) if k else ([], [])
     if ensembles is not None and len(ensembles) and k:
-        tab = ensembles.assign(group=ensembles["group"].astype(str), case=ensembles["case"].astype(str))
-        tab = tab.set_index(["group", "case"])
-        idx = pd.MultiIndex.from_frame(pts[["group", "physical_case"]].astype(str))
+        key = ("physical_id", "physical_id") if "physical_id" in ensembles else ("case", "physical_case")
+        tab = ensembles.assign(group=ensembles["group"].astype(str), **{key[0]: ensembles[key[0]].astype(str)})
+        tab = tab.set_index(["group", key[0]])
+        idx = pd.MultiIndex.from_frame(pts[["group", key[1]]].astype(str))
         for mine, theirs in (("efficiency", "E"), ("peak_stress_ratio", "tan_delta"), ("tan_phi", "tan_phi")):
             for suffix in ("", "_lo", "_hi"):
                 if theirs + suffix in tab:

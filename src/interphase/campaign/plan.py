@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from interphase.case import Case, Start, case_id
+from interphase.case import Case, Start, case_id, physical_id
 from interphase.campaign.schema import Campaign
 from interphase.errors import InputError
 
@@ -37,6 +37,7 @@ class PlannedCase:
     pair_id: str | None = None                  # case id of the paired box test (interface cases)
     index: int = 0                              # position in the plan (stable order)
     recipe_id: str = ""
+    physical_id: str = ""                       # interphase.case.physical_id: the same for every seed of the case
     params: dict = field(default_factory=dict, compare=False, hash=False)
 
     def meta(self, campaign: str = "") -> dict:
@@ -44,7 +45,7 @@ class PlannedCase:
         return {"case_id": self.case_id, "engine": self.engine, "group": self.group, "role": self.role,
                 "label": self.label, "pair_id": self.pair_id, "campaign": campaign,
                 "values": {k: _jsonable(v) for k, v in self.values}, "params": self.params,
-                "recipe_id": self.recipe_id}
+                "recipe_id": self.recipe_id, "physical_id": self.physical_id}
 
 
 def _jsonable(v):
@@ -118,7 +119,7 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
             out.append(PlannedCase(
                 case_id=ids[i], engine=name, case=cases[i], group=c.group, role=c.role, label=case_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
-                recipe_id=rid, params=params))
+                recipe_id=rid, physical_id=physical_id(cases[i]), params=params))
     return out
 
 
@@ -156,7 +157,7 @@ def iter_plan(campaign: Campaign, engines=None, identity=engine_identity):
                 pair = case_id(box.case, name, rid) if b is c and box is not None else None
                 yield PlannedCase(case_id=case_id(b.case, name, rid), engine=name, case=b.case, group=b.group,
                                   role=b.role, label=case_label(b.case), values=b.values, pair_id=pair, index=index,
-                                  recipe_id=rid, params=flat_params(b.case))
+                                  recipe_id=rid, physical_id=physical_id(b.case), params=flat_params(b.case))
                 index += 1
 
 

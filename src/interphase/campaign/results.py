@@ -20,9 +20,10 @@ import pandas as pd
 from interphase.errors import InputError
 
 
-#: first in summaries.csv: a run's identity and physical case; then every other column of the index
+#: first in summaries.csv: a run's identity and physical case (physical_id: interphase.case.physical_id,
+#: what its seeds share); then every other column of the index
 #: (Case parameters, the summary's own columns by their names, elapsed [s]) but its bookkeeping
-RUN_COLUMNS = ("case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
+RUN_COLUMNS = ("case_id", "label", "physical_id", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
                "pair_id")
 BOOKKEEPING = ("status", "cause", "started", "finished", "attempts", "host", "slurm_job", "updated", "role",
                "case", "reasons", "engine")
@@ -128,9 +129,24 @@ def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.Da
         keep.append(runs[runs["_recipe"] == use])
     out = pd.concat(keep).sort_index() if keep else asked
     attrs["other_recipe"] = len(asked) - len(out)
-    out = out.drop(columns="_recipe")
+    out = with_physical_ids(out.drop(columns="_recipe"), planned)
     out.attrs.update(attrs)
     return out
+
+
+def with_physical_ids(summaries: pd.DataFrame, planned) -> pd.DataFrame:
+    """The runs with their `physical_id` (PlannedCase.physical_id) where the index has none (runs
+    indexed before the column existed): the planned case's of the same id, else of the same label
+    and engine (a run of an earlier recipe: the inputs the label names are the plan's)."""
+    by_id = {p.case_id: p.physical_id for p in planned}
+    by_key = {(p.label, p.engine): p.physical_id for p in planned}
+    have = (summaries["physical_id"] if "physical_id" in summaries
+            else pd.Series(None, index=summaries.index, dtype=object))
+    from_plan = [by_id.get(cid) or by_key.get((lb, e)) for cid, lb, e in
+                 zip(summaries["case_id"].astype(str), summaries["label"].astype(str), summaries["engine"].astype(str))]
+    summaries["physical_id"] = have.where(have.notna() & have.astype(str).ne(""),
+                                          pd.Series(from_plan, index=summaries.index, dtype=object))
+    return summaries
 
 
 def recipe_notes(attrs: dict) -> list[str]:
