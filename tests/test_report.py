@@ -12,7 +12,7 @@ import pytest
 from interphase.campaign.schema import load_campaign
 from interphase.cli import main
 from interphase.errors import InputError
-from interphase.report.build import report_from_summaries
+from interphase.report.build import analyse, report_from_summaries
 from interphase.report.synthetic import synthetic_summaries
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -123,6 +123,20 @@ def test_too_few_points_draw_and_say_no_fit(tmp_path):
     assert (tmp_path / "figures" / "fig6_8.png").stat().st_size > 1000
     check_latex((tmp_path / "tables" / "correlations.tex").read_text())
     assert not res.warnings or all(isinstance(w, str) for w in res.warnings)
+
+
+def test_the_analysis_is_a_model_of_tables_and_writes_nothing(tmp_path, monkeypatch):
+    """analyse: the report's content from a summaries table alone (no store, no folder); every
+    table the page shows is in the model, and nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    summ = synthetic_summaries(150, seed=11)
+    m = analyse(summ, n_boot=0)
+    assert list(tmp_path.iterdir()) == []
+    names = [t.name for t in m.tables]
+    assert "correlations" in names and [n for n in names if n.startswith("results_")]
+    assert len(m.points) == summ["test"].eq("interface").sum() and m.ensembles is None   # one seed a case
+    assert m.chain.theta_r and m.criterion_check is not None and m.n_box == 2
+    assert m.fits and all(f.spec is not None for f in m.fits)
 
 
 def test_empty_index_still_writes_a_report(tmp_path):
