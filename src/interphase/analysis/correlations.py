@@ -504,7 +504,7 @@ def _draw_means(mat: np.ndarray, n: np.ndarray, rng, n_boot: int) -> np.ndarray:
 
 @dataclass
 class SeedEnsemble:
-    """A campaign's interface runs grouped by physical case (group, label without `-sN`).
+    """A campaign's interface runs grouped by physical case (group, physical_id; named by the label without `-sN`).
 
     points  one row per physical case, index 0..K−1 (= column `case_index`): every AVERAGED column is
             the mean over its seeds, with `<col>_lo`/`<col>_hi` (95 %, analysis.ensemble.seed_interval:

@@ -142,8 +142,9 @@ def with_physical_ids(summaries: pd.DataFrame, planned) -> pd.DataFrame:
     by_key = {(p.label, p.engine): p.physical_id for p in planned}
     have = (summaries["physical_id"] if "physical_id" in summaries
             else pd.Series(None, index=summaries.index, dtype=object))
+    engine = summaries["engine"].astype(str) if "engine" in summaries else pd.Series("", index=summaries.index)
     from_plan = [by_id.get(cid) or by_key.get((lb, e)) for cid, lb, e in
-                 zip(summaries["case_id"].astype(str), summaries["label"].astype(str), summaries["engine"].astype(str))]
+                 zip(summaries["case_id"].astype(str), summaries["label"].astype(str), engine)]
     summaries["physical_id"] = have.where(have.notna() & have.astype(str).ne(""),
                                           pd.Series(from_plan, index=summaries.index, dtype=object))
     return summaries

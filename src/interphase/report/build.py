@@ -9,10 +9,14 @@ Output folder (default: the campaign's output folder + "/report"):
             draw (Fig. 6.9 without flat-spaced surfaces) is left out and the page says why
   correlations.json   the fits (BilinearFit.to_dict rows)
   index.html          links them all
-Seeds: every figure, results table and fit is per PHYSICAL case (a case label without `-sN`): the
+Seeds: every figure, results table and fit is per PHYSICAL case (its seeds share a physical_id,
+interphase.case.physical_id; it is named by its label without `-sN`): the
 mean over its seeds with a 95 % interval (tan δ, tan φ and E those of the ensembles table), fits with
 the seed bootstrap (analysis.correlations.seed_ensemble, fit_study; docs/methods.md §7).
 Memory: only the summaries table and, per figure, one case's series or contacts at a time are read.
+Code: `analyse(summaries, …) → ReportModel` computes everything and writes nothing; `write(model, out)`
+draws and writes it. The summaries and curves tables it writes are the campaign's result format
+(campaign.results).
 """
 
 from __future__ import annotations
