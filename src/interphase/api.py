@@ -47,8 +47,9 @@ def _campaign(campaign, runs=None):
 
 def plan(campaign, engine: str | None = None, *, lazy: bool = False):
     """The planned runs of a campaign: `PlannedCase(case_id, engine, case, group, role, label,
-    pair_id, params)`, box tests first. The case id hashes the case's inputs, the engine and its
-    recipe: the same on every machine. `lazy=True` gives a generator (any size, built one case at a
+    pair_id, physical_id, params)`, box tests first. The case id hashes the case's inputs, the engine
+    and its recipe: the same on every machine; the physical id hashes the inputs without the seed
+    (every seed of a case shares it: what the ensembles pool). `lazy=True` gives a generator (any size, built one case at a
     time); else a list. `engine` replaces the file's engines."""
     from interphase.campaign.plan import iter_plan
     from interphase.campaign.plan import plan as _plan

@@ -21,10 +21,10 @@ from interphase.errors import InputError
 
 
 #: first in summaries.csv: a run's identity and physical case (physical_id: interphase.case.physical_id,
-#: what its seeds share); then every other column of the index
-#: (Case parameters, the summary's own columns by their names, elapsed [s]) but its bookkeeping
-RUN_COLUMNS = ("case_id", "label", "physical_id", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
-               "pair_id")
+#: what its seeds share); then every other column of the index (Case parameters, the summary's own
+#: columns by their names, elapsed [s]) but its bookkeeping
+RUN_COLUMNS = ("case_id", "label", "physical_id", "group", "test", "device", "profile_label", "friction_ps",
+               "gradation", "seed", "pair_id")
 BOOKKEEPING = ("status", "cause", "started", "finished", "attempts", "host", "slurm_job", "updated", "role",
                "case", "reasons", "engine")
 
