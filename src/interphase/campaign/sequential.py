@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from interphase.analysis.ensemble import physical_case, physical_ids
+from interphase.campaign.results import with_physical_ids
 
 #: rounds a case runs after its interval first reaches the target (then it stops, whatever the
 #: interval then reads): without it the rule covered 92.4 % (nominal 95 %) at tan δ ± 0.02 in
@@ -189,8 +190,6 @@ def rounds_of(campaign, planned, store) -> dict[Key, CaseRound]:
     if summ.empty:
         rounds = replay(rule, done, lambda k: {})
     else:
-        from interphase.campaign.results import with_physical_ids
-
         rounds = replay(rule, done, _evaluator(rule, with_physical_ids(summ.copy(), planned), store))
     names = {interface_key(p): physical_case(p.label) for p in planned if p.role == "interface"}
     return {key: dataclasses.replace(r, case=names.get(key, "")) for key, r in rounds.items()}
@@ -205,7 +204,8 @@ def select(campaign, planned, store) -> tuple[list, dict[Key, CaseRound]]:
 
 def rounds_frame(rule, rounds: dict[Key, CaseRound]) -> pd.DataFrame:
     """One row per physical case: seeds asked for and finished, the interval reached, the state."""
-    cols = ["engine", "group", "case", "physical_id", "wanted", "finished", "n", "value", "lo", "hi", "halfwidth", "state"]
+    cols = ["engine", "group", "case", "physical_id", "wanted", "finished", "n", "value", "lo", "hi", "halfwidth",
+            "state"]
     df = pd.DataFrame([r.to_dict() for r in rounds.values()], columns=cols)
     return df.assign(quantity=rule.quantity, target=rule.halfwidth, cap=rule.max)
 
