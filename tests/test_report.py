@@ -193,7 +193,11 @@ def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp
 
     res = build_report(quick_campaign, out=tmp_path / "rep", n_boot=9)
     s = pd.read_csv(res.folder / "tables" / "summaries.csv")
-    assert len(s) == 6 and list(s.columns[:4]) == ["case_id", "label", "group", "test"]
+    assert len(s) == 6 and list(s.columns[:5]) == ["case_id", "label", "physical_id", "group", "test"]
+    # a physical case's seeds share its id, and only they do
+    name = s["label"].str.replace(r"-s\d+$", "", regex=True)
+    assert s["physical_id"].notna().all() and s.groupby(["group", name])["physical_id"].nunique().eq(1).all()
+    assert s.groupby("physical_id")["seed"].nunique().eq(s.groupby("physical_id").size()).all()
     assert {"peak_stress_ratio", "theta_a_deg_92", "theta_r_surface_deg", "seed", "gradation", "friction_ps"} <= set(s.columns)
     box = s[s["test"].eq("box")].set_index("case_id")["peak_stress_ratio"]
     iface = s[s["test"].eq("interface")]
