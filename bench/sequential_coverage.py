@@ -44,7 +44,7 @@ import pandas as pd
 from scipy import stats
 
 from interphase.analysis.ensemble import ratio_interval
-from interphase.report.ensembles import ensemble_tables
+from interphase.analysis.ensemble_table import ensemble_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 REPRO = ROOT / "docs" / "reproduction"

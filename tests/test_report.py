@@ -12,7 +12,7 @@ import pytest
 from interphase.campaign.schema import load_campaign
 from interphase.cli import main
 from interphase.errors import InputError
-from interphase.report.build import report_from_summaries
+from interphase.report.build import analyse, report_from_summaries
 from interphase.report.synthetic import synthetic_summaries
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,6 +125,20 @@ def test_too_few_points_draw_and_say_no_fit(tmp_path):
     assert not res.warnings or all(isinstance(w, str) for w in res.warnings)
 
 
+def test_the_analysis_is_a_model_of_tables_and_writes_nothing(tmp_path, monkeypatch):
+    """analyse: the report's content from a summaries table alone (no store, no folder); every
+    table the page shows is in the model, and nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    summ = synthetic_summaries(150, seed=11)
+    m = analyse(summ, n_boot=0)
+    assert list(tmp_path.iterdir()) == []
+    names = [t.name for t in m.tables]
+    assert "correlations" in names and [n for n in names if n.startswith("results_")]
+    assert len(m.points) == summ["test"].eq("interface").sum() and m.ensembles is None   # one seed a case
+    assert m.chain.theta_r and m.criterion_check is not None and m.n_box == 2
+    assert m.fits and all(f.spec is not None for f in m.fits)
+
+
 def test_empty_index_still_writes_a_report(tmp_path):
     summ = synthetic_summaries(3, seed=1).iloc[0:0]
     res = report_from_summaries(summ, tmp_path, n_boot=0)
@@ -179,7 +193,11 @@ def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp
 
     res = build_report(quick_campaign, out=tmp_path / "rep", n_boot=9)
     s = pd.read_csv(res.folder / "tables" / "summaries.csv")
-    assert len(s) == 6 and list(s.columns[:4]) == ["case_id", "label", "group", "test"]
+    assert len(s) == 6 and list(s.columns[:5]) == ["case_id", "label", "physical_id", "group", "test"]
+    # a physical case's seeds share its id, and only they do
+    name = s["label"].str.replace(r"-s\d+$", "", regex=True)
+    assert s["physical_id"].notna().all() and s.groupby(["group", name])["physical_id"].nunique().eq(1).all()
+    assert s.groupby("physical_id")["seed"].nunique().eq(s.groupby("physical_id").size()).all()
     assert {"peak_stress_ratio", "theta_a_deg_92", "theta_r_surface_deg", "seed", "gradation", "friction_ps"} <= set(s.columns)
     box = s[s["test"].eq("box")].set_index("case_id")["peak_stress_ratio"]
     iface = s[s["test"].eq("interface")]

@@ -17,7 +17,7 @@ from conftest import need_binary  # noqa: E402
 
 from interphase.campaign.plan import plan  # noqa: E402
 from interphase.campaign.schema import SeedRule, load_campaign  # noqa: E402
-from interphase.campaign.sequential import cap_notes, replay, wanted_ids  # noqa: E402
+from interphase.campaign.sequential import cap_notes, interface_key, replay, wanted_ids  # noqa: E402
 from interphase.cli import main  # noqa: E402
 
 BASE = """[campaign]
@@ -85,7 +85,8 @@ def test_seeds_plan_every_seed_to_the_cap_and_run_start_first(tmp_path):
     assert c.seeds == SeedRule(2, 5, 1, "E", 0.05)
     planned = plan(c, identity=lambda name: "0123456789abcdef")
     assert sorted({p.case.seed for p in planned}) == [1, 2, 3, 4, 5]
-    keys = {("liggghts", "seq", p.label.rsplit("-s", 1)[0]) for p in planned if p.role == "interface"}
+    keys = {interface_key(p) for p in planned if p.role == "interface"}
+    assert len(keys) == 2 and {k[2] for k in keys} == {p.physical_id for p in planned if p.role == "interface"}
     rounds = replay(c.seeds, {k: set() for k in keys}, lambda k: {})
     want = wanted_ids(c.seeds, planned, rounds)
     ran = sorted((p.role, p.case.seed) for p in planned if p.case_id in want)

@@ -24,8 +24,8 @@ Bad input raises interphase.errors.InputError (the file, the field and the fix).
 from interphase.api import (calibrate, element, ensembles, load_campaign, plan, predict, run, status, summaries,
                             validate)
 from interphase.errors import InputError
+from interphase.version import __version__
 
-__version__ = "0.1.0"
 __all__ = ["load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "element", "calibrate",
            "validate", "InputError",
            "__version__"]

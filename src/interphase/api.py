@@ -47,8 +47,9 @@ def _campaign(campaign, runs=None):
 
 def plan(campaign, engine: str | None = None, *, lazy: bool = False):
     """The planned runs of a campaign: `PlannedCase(case_id, engine, case, group, role, label,
-    pair_id, params)`, box tests first. The case id hashes the case's inputs, the engine and its
-    recipe: the same on every machine. `lazy=True` gives a generator (any size, built one case at a
+    pair_id, physical_id, params)`, box tests first. The case id hashes the case's inputs, the engine
+    and its recipe: the same on every machine; the physical id hashes the inputs without the seed
+    (every seed of a case shares it: what the ensembles pool). `lazy=True` gives a generator (any size, built one case at a
     time); else a list. `engine` replaces the file's engines."""
     from interphase.campaign.plan import iter_plan
     from interphase.campaign.plan import plan as _plan
@@ -93,7 +94,7 @@ def summaries(campaign, *, runs: PathLike | None = None):
     report's tables/summaries.csv): the case's parameters (SI) and its summary (peak_stress_ratio,
     tan_delta-like ratios [-], theta_r_*_deg, shear_disp_at_peak [m], …), `pair_id` = its box
     test. Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     c = _campaign(campaign, runs)
     _, store, rows = open_campaign(c.path, c.output)
@@ -105,15 +106,10 @@ def ensembles(campaign, *, runs: PathLike | None = None):
     """One row per physical case (its seeds pooled): tan δ, tan φ and E at the peak and at the
     critical state, each with its 95 % interval and the number of seeds (the report's ensembles
     table; docs/methods.md). Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
-    from interphase.report.ensembles import ensemble_tables
+    from interphase.campaign.results import campaign_ensembles
 
     c = _campaign(campaign, runs)
-    _, store, rows = open_campaign(c.path, c.output)
-    try:
-        return ensemble_tables(rows, store)[0]
-    finally:
-        store.close()
+    return campaign_ensembles(c.path, c.output)
 
 
 def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,

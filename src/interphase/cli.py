@@ -10,8 +10,8 @@ import argparse
 import json
 import sys
 
-from interphase import __version__
 from interphase.errors import InputError
+from interphase.version import __version__
 
 
 def _jsonable(obj):
@@ -229,8 +229,7 @@ def _add_engine(sub) -> None:
 
 def _load_case(path: str):
     """(Case, warnings) of a case file: the checks `campaign run` makes on a campaign's cases."""
-    from interphase.campaign.checks import case_file_warnings
-    from interphase.case import load_case_file
+    from interphase.campaign.checks import case_file_warnings, load_case_file
 
     case = load_case_file(path)
     warnings = case_file_warnings(path, case)

@@ -22,9 +22,9 @@ import time
 import traceback
 from pathlib import Path
 
-from interphase import __version__
 from interphase.campaign import store as st
 from interphase.case import Case
+from interphase.version import __version__
 
 
 class Interrupted(BaseException):

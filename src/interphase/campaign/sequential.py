@@ -3,10 +3,11 @@ its interval needs, between `start` and `max`.
 
 The rule (a fixed-width sequential rule; its coverage is checked by resampling the study's runs in
 bench/sequential_coverage.py, docs/methods.md "Sequential seeds"):
-  - every physical case (a group's case label without its `-sN`, per engine) runs seeds 1..start;
+  - every physical case (a group's runs of one physical_id, interphase.case.physical_id: the case
+    without its seed; per engine) runs seeds 1..start;
   - a round ends when every run it asked for has finished; then each physical case whose seeds
     1..k have all finished (and their paired box tests, for E) is judged: its 95 % interval of the
-    target quantity, computed by the report's seed-ensemble code (report.ensembles.ensemble_tables
+    target quantity, computed by the report's seed-ensemble code (analysis.ensemble_table.ensemble_tables
     on exactly the runs of that round), has half-width h = (hi − lo)/2 [-]. The first time h ≤
     target the case runs one more round (`confirming`: seeds k+1..k+step) and then stops (`reached`)
     on that round's interval, whatever it reads; at k = max it stops (`capped`, or `reached` if
@@ -23,20 +24,22 @@ only runs that round had asked for: the estimate a case stops on is the one its 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.ensemble import physical_case
+from interphase.analysis.ensemble import physical_case, physical_ids
+from interphase.campaign.results import with_physical_ids
 
 #: rounds a case runs after its interval first reaches the target (then it stops, whatever the
 #: interval then reads): without it the rule covered 92.4 % (nominal 95 %) at tan δ ± 0.02 in
 #: bench/sequential_coverage.py, with it 93.5 % or more in every setting checked (docs/methods.md)
 CONFIRM = 1
 
-#: a physical case's key: (engine, group, case label without the seed)
+#: a physical case's key: (engine, group, physical_id)
 Key = tuple[str, str, str]
 
 
@@ -47,7 +50,7 @@ class CaseRound:
 
     engine: str
     group: str
-    case: str
+    physical_id: str
     wanted: int
     finished: int
     n: int = 0
@@ -56,6 +59,7 @@ class CaseRound:
     hi: float = math.nan
     halfwidth: float = math.nan
     state: str = "waiting"          # waiting (its first round runs) | adding | confirming | reached | capped
+    case: str = ""                  # its name: the label without the seed (rounds_of)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -106,7 +110,7 @@ def replay(rule, done: dict[Key, set[int]], evaluate) -> dict[Key, CaseRound]:
 
 def interface_key(p) -> Key:
     """The physical case of a planned interface run (PlannedCase)."""
-    return p.engine, p.group, physical_case(p.label)
+    return p.engine, p.group, p.physical_id
 
 
 def _done_seeds(planned, finished: set[str], quantity: str) -> dict[Key, set[int]]:
@@ -147,13 +151,13 @@ class _CachedCurves:
 
 
 def _evaluator(rule, summaries: pd.DataFrame, store):
-    """evaluate({key: k}) for `replay`: the report's ensembles table (report.ensembles) on the
+    """evaluate({key: k}) for `replay`: the report's ensembles table (analysis.ensemble_table) on the
     interface runs of seeds 1..k of each case, the box tests paired with them and the [pairs] seeds."""
-    from interphase.report.ensembles import ensemble_tables
+    from interphase.analysis.ensemble_table import ensemble_tables
 
     curves = _CachedCurves(store)
-    s = summaries.assign(_key=[(str(e), str(g), physical_case(lb)) for e, g, lb in
-                               zip(summaries["engine"], summaries["group"], summaries["label"])])
+    s = summaries.assign(_key=[(str(e), str(g), str(pid)) for e, g, pid in
+                               zip(summaries["engine"], summaries["group"], physical_ids(summaries))])
     seed = pd.to_numeric(s["seed"], errors="coerce")
     iface = s["test"].astype(str).eq("interface")
 
@@ -167,7 +171,7 @@ def _evaluator(rule, summaries: pd.DataFrame, store):
             table = ensemble_tables(sub.drop(columns="_key"), curves)[0]
             q = rule.quantity
             for r in table.itertuples(index=False):
-                out[(str(engine), str(r.group), str(r.case))] = (getattr(r, q), getattr(r, f"{q}_lo"),
+                out[(str(engine), str(r.group), str(r.physical_id))] = (getattr(r, q), getattr(r, f"{q}_lo"),
                                                                  getattr(r, f"{q}_hi"))
         return out
 
@@ -184,8 +188,11 @@ def rounds_of(campaign, planned, store) -> dict[Key, CaseRound]:
     finished = set(summ["case_id"].astype(str)) if not summ.empty else set()
     done = _done_seeds(planned, finished, rule.quantity)
     if summ.empty:
-        return replay(rule, done, lambda k: {})
-    return replay(rule, done, _evaluator(rule, summ, store))
+        rounds = replay(rule, done, lambda k: {})
+    else:
+        rounds = replay(rule, done, _evaluator(rule, with_physical_ids(summ.copy(), planned), store))
+    names = {interface_key(p): physical_case(p.label) for p in planned if p.role == "interface"}
+    return {key: dataclasses.replace(r, case=names.get(key, "")) for key, r in rounds.items()}
 
 
 def select(campaign, planned, store) -> tuple[list, dict[Key, CaseRound]]:
@@ -197,7 +204,8 @@ def select(campaign, planned, store) -> tuple[list, dict[Key, CaseRound]]:
 
 def rounds_frame(rule, rounds: dict[Key, CaseRound]) -> pd.DataFrame:
     """One row per physical case: seeds asked for and finished, the interval reached, the state."""
-    cols = ["engine", "group", "case", "wanted", "finished", "n", "value", "lo", "hi", "halfwidth", "state"]
+    cols = ["engine", "group", "case", "physical_id", "wanted", "finished", "n", "value", "lo", "hi", "halfwidth",
+            "state"]
     df = pd.DataFrame([r.to_dict() for r in rounds.values()], columns=cols)
     return df.assign(quantity=rule.quantity, target=rule.halfwidth, cap=rule.max)
 
