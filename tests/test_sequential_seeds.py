@@ -41,20 +41,20 @@ box_height_d50 = 6.0
 [sweep]
 friction_ps = [0.05, 0.5]
 """
-SEEDS = '\n[seeds]\nstart = 2\nmax = {max}\ntarget = {{quantity = "E", halfwidth = {h}}}\n'
+SEEDS = '\n[seeds]\nstart = 3\nmax = {max}\ntarget = {{quantity = "E", halfwidth = {h}}}\n'
 
 # (what replaces the [seeds] table's text, line the message points at, what it must name)
 BAD = {
-    "unknown key": ("[seeds]\nstart = 2\nmax = 4\nstep = 1\nstpe = 2\ntarget = {quantity = \"E\", halfwidth = 0.05}",
+    "unknown key": ("[seeds]\nstart = 3\nmax = 4\nstep = 1\nstpe = 2\ntarget = {quantity = \"E\", halfwidth = 0.05}",
                     26, "seeds.stpe"),
     "start > max": ("[seeds]\nstart = 5\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0.05}", 23, "seeds.start"),
-    "halfwidth 0": ("[seeds]\nstart = 2\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0}", 25,
+    "halfwidth 0": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0}", 25,
                     "seeds.target.halfwidth"),
-    "negative halfwidth": ("[seeds]\nstart = 2\nmax = 4\ntarget = {quantity = \"E\", halfwidth = -0.1}", 25,
+    "negative halfwidth": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E\", halfwidth = -0.1}", 25,
                            "seeds.target.halfwidth"),
-    "unknown quantity": ("[seeds]\nstart = 2\nmax = 4\ntarget = {quantity = \"E_peak\", halfwidth = 0.05}", 25,
+    "unknown quantity": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E_peak\", halfwidth = 0.05}", 25,
                          "seeds.target.quantity"),
-    "start of one seed": ("[seeds]\nstart = 1\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0.05}", 23,
+    "start of two seeds": ("[seeds]\nstart = 2\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0.05}", 23,
                           "seeds.start"),
 }
 
@@ -82,7 +82,7 @@ def test_seeds_plan_every_seed_to_the_cap_and_run_start_first(tmp_path):
     f = tmp_path / "ok.toml"
     f.write_text(BASE + SEEDS.format(max=5, h=0.05))
     c = load_campaign(f)
-    assert c.seeds == SeedRule(2, 5, 1, "E", 0.05)
+    assert c.seeds == SeedRule(3, 5, 1, "E", 0.05)
     planned = plan(c, identity=lambda name: "0123456789abcdef")
     assert sorted({p.case.seed for p in planned}) == [1, 2, 3, 4, 5]
     keys = {interface_key(p) for p in planned if p.role == "interface"}
@@ -90,7 +90,8 @@ def test_seeds_plan_every_seed_to_the_cap_and_run_start_first(tmp_path):
     rounds = replay(c.seeds, {k: set() for k in keys}, lambda k: {})
     want = wanted_ids(c.seeds, planned, rounds)
     ran = sorted((p.role, p.case.seed) for p in planned if p.case_id in want)
-    assert ran == [("box", 1), ("box", 2)] + [("interface", 1)] * 2 + [("interface", 2)] * 2
+    assert ran == [("box", 1), ("box", 2), ("box", 3)] + [("interface", 1)] * 2 + [("interface", 2)] * 2 \
+        + [("interface", 3)] * 2
 
 
 def _t_eval(values: dict):
@@ -168,35 +169,35 @@ def _status(f: Path) -> dict:
 
 @pytest.mark.liggghts
 def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
-    """Two physical cases with E as the target. Round 1 (seeds 1–2, cap 2) gives each its E interval;
-    then the target is set between the two half-widths and the cap raised to 4: the narrow case runs
-    its one confirming seed (3) and stops, the wide one goes on to seed 4 (with its soil test of each
-    seed); nothing finished is rerun, and a rerun runs nothing."""
+    """Two physical cases with E as the target. Round 1 (seeds 1–3, cap 3: no interval below 3 seeds)
+    gives each its E interval; then the target is set between the two half-widths and the cap raised
+    to 5: the narrow case runs its one confirming seed (4) and stops, the wide one goes on to seed 5
+    (with its soil test of each seed); nothing finished is rerun, and a rerun runs nothing."""
     need_binary("liggghts")
     f = tmp_path / "seq.toml"
-    f.write_text(BASE + SEEDS.format(max=2, h=1e-9))
+    f.write_text(BASE + SEEDS.format(max=3, h=1e-9))
     assert main(["run", str(f), "--plain"]) == 0
     first = {r["case"]: r for r in _status(f)["seeds"]}
-    assert {(r["finished"], r["wanted"], r["state"]) for r in first.values()} == {(2, 2, "capped")}
+    assert {(r["finished"], r["wanted"], r["state"]) for r in first.values()} == {(3, 3, "capped")}
     halves = {k: r["halfwidth"] for k, r in first.items()}
     wide, narrow = sorted(halves, key=halves.get, reverse=True)
     assert halves[wide] > halves[narrow] > 0
     out = tmp_path / "out"
     done_before = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
-    assert len(done_before) == 6                   # 2 cases × 2 seeds + the 2 soil tests
+    assert len(done_before) == 9                   # 2 cases × 3 seeds + the 3 soil tests
 
-    f.write_text(BASE + SEEDS.format(max=4, h=(halves[wide] + halves[narrow]) / 2))
+    f.write_text(BASE + SEEDS.format(max=5, h=(halves[wide] + halves[narrow]) / 2))
     assert main(["run", str(f), "--plain"]) == 0
     status = _status(f)
     seeds = {r["case"]: r for r in status["seeds"]}
-    assert (seeds[narrow]["finished"], seeds[narrow]["wanted"], seeds[narrow]["state"]) == (3, 3, "reached")
-    assert (seeds[wide]["finished"], seeds[wide]["wanted"], seeds[wide]["n"]) == (4, 4, 4)
+    assert (seeds[narrow]["finished"], seeds[narrow]["wanted"], seeds[narrow]["state"]) == (4, 4, "reached")
+    assert (seeds[wide]["finished"], seeds[wide]["wanted"], seeds[wide]["n"]) == (5, 5, 5)
     assert seeds[wide]["state"] in ("reached", "capped")
     labels = [r["label"] for r in status["cases"]]
     box = "box-periodic-box-mu0.9-mono"
-    assert sorted(lb for lb in labels if lb.endswith("-s3")) == sorted([f"{wide}-s3", f"{narrow}-s3", f"{box}-s3"])
-    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{box}-s4"])
+    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{narrow}-s4", f"{box}-s4"])
+    assert sorted(lb for lb in labels if lb.endswith("-s5")) == sorted([f"{wide}-s5", f"{box}-s5"])
     after = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
-    assert len(after) == 11 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
+    assert len(after) == 14 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
     assert main(["run", str(f), "--plain"]) == 0                    # the rounds replay: nothing to run
     assert {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()} == after

@@ -363,11 +363,13 @@ def _seed_rule(ctx: _Ctx, table: dict, pairs: dict) -> SeedRule:
             raise ctx.error(p, f"[seeds] needs {key}", "e.g. start = 3, max = 12, step = 1, "
                             'target = {quantity = "E", halfwidth = 0.05}')
     n = {}
-    for key, low in (("start", 2), ("max", 2), ("step", 1)):
+    from interphase.analysis.ensemble import MIN_SEEDS
+
+    for key, low in (("start", MIN_SEEDS), ("max", MIN_SEEDS), ("step", 1)):
         v = table.get(key, 1)
         if isinstance(v, bool) or not isinstance(v, int) or v < low:
             raise ctx.error(p + (key,), f"must be an integer ≥ {low}, got {v!r}",
-                            "an interval needs at least two seeds" if low == 2 else None)
+                            f"no interval is computed below {MIN_SEEDS} seeds (docs/methods.md)" if low > 1 else None)
         n[key] = v
     if n["start"] > n["max"]:
         raise ctx.error(p + ("start",), f"start = {n['start']} is more than max = {n['max']}",
