@@ -20,7 +20,7 @@ import sys
 import pandas as pd
 
 from interphase.analysis.correlations import fit_plateau
-from interphase.report.build import open_campaign
+from interphase.campaign.results import open_campaign
 
 
 def main(campaigns: list[str]) -> None:

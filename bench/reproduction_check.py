@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from interphase.campaign.restore import is_restored
-from interphase.report.build import open_campaign
+from interphase.campaign.results import open_campaign
 
 ROUNDING = 1e-5      # the table's float_format %.6g: relative error up to 5e-6
 

@@ -26,7 +26,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from interphase.analysis.anisotropy import LEE_TILT, resultant_direction
-from interphase.report.build import open_campaign
+from interphase.campaign.results import open_campaign
 
 
 def run_row(folder, d50: float, rt: float, peak: int) -> dict | None:

@@ -66,7 +66,7 @@ def test_compare_shifted_ensemble_differs_on_its_metric_only():
 
 @pytest.mark.liggghts
 def test_compare_of_a_campaign_with_itself_finds_no_change(quick_campaign):
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     _, store, summ = open_campaign(quick_campaign)
     try:

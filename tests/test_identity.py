@@ -78,7 +78,7 @@ def test_report_reads_runs_written_elsewhere(quick_campaign, tmp_path, monkeypat
 def test_the_report_uses_one_recipe_per_engine_and_counts_what_it_left_out(tmp_path):
     from interphase.campaign.plan import plan
     from interphase.campaign.schema import load_campaign
-    from interphase.report.build import one_run_per_case, recipe_notes
+    from interphase.campaign.results import one_run_per_case, recipe_notes
 
     f = tmp_path / "c.toml"
     f.write_text('[campaign]\nname = "c"\nengines = ["liggghts"]\n[case]\ntest = "interface"\n'

@@ -1,6 +1,9 @@
 """The house rules of the design, held by parsing every module (imports inside functions count too):
 surface/, analysis/ and io/ import nothing from engines/, campaign/, report/ or cli; engines/ imports
-nothing from campaign/, report/ or cli. The checker is shown to flag each kind of import it must see."""
+nothing from campaign/, report/ or cli; campaign/ imports nothing from report/, cli, cli_soils or api
+(the result format is the campaign's: campaign/results.py); and no two modules of src/interphase
+import each other, directly or round a circle. The checkers are shown to flag each kind of import
+they must see."""
 
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ FORBIDDEN = {
     "analysis": ("engines", "campaign", "report", "cli"),
     "io": ("engines", "campaign", "report", "cli"),
     "engines": ("campaign", "report", "cli"),
+    "campaign": ("report", "cli", "cli_soils", "api"),
 }
 
 
@@ -75,6 +79,10 @@ def test_the_rules_cover_every_layer_present():
 
 
 @pytest.mark.parametrize("module, source", [
+    ("interphase.campaign.restore", "from interphase.report.build import RUN_COLUMNS\n"),
+    ("interphase.campaign.validate", "def f():\n    from interphase.api import ensembles\n"),
+    ("interphase.campaign.validate", "def f():\n    from interphase import api\n"),
+    ("interphase.campaign.run", "from ..cli_soils import main\n"),
     ("interphase.io.liggghts", "from interphase.engines.base import Results\n"),
     ("interphase.io.liggghts", "import interphase.campaign.store as st\n"),
     ("interphase.analysis.summary", "from interphase import report\n"),
@@ -96,8 +104,98 @@ def test_the_checker_flags_a_forbidden_import(module, source):
     ("interphase.engines.liggghts", "from interphase.io.liggghts import read_folder\n"),
     ("interphase.campaign.runner", "from interphase.engines.base import get_engine\n"),
     ("interphase.cli", "from interphase.campaign.runner import run_single\n"),
+    ("interphase.report.build", "from interphase.campaign.results import open_campaign\n"),
+    ("interphase.campaign.sequential", "from interphase.analysis.ensemble_table import ensemble_tables\n"),
     ("interphase.surface.trace", "from .profiles import Profile\n"),
     ("interphase.io.yade", "import json\nfrom pathlib import Path\n"),
 ])
 def test_the_checker_lets_allowed_imports_pass(module, source):
     assert violations(source, module) == []
+
+
+# ---- no import cycle -------------------------------------------------------------------------
+def module_graph(sources: dict[str, tuple[str, bool]]) -> dict[str, set[str]]:
+    """module → the modules (keys of `sources`: dotted name → (source, is it a package's
+    __init__)) it imports anywhere in its body. `from p import x` is an import of p.x when that is a
+    module, else of p (x being a name defined there); `import p.q` of p.q."""
+    graph = {}
+    for module, (source, is_package) in sources.items():
+        package = module if is_package else module.rpartition(".")[0]
+        deps = set()
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.Import):
+                deps |= {a.name for a in node.names if a.name in sources}
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")
+                    base = base[:len(base) - (node.level - 1)]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    target = node.module
+                for a in node.names:
+                    if f"{target}.{a.name}" in sources:
+                        deps.add(f"{target}.{a.name}")
+                    elif target in sources:
+                        deps.add(target)
+        graph[module] = deps - {module}
+    return graph
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle as [a, b, …, a], or None (depth-first search, white/grey/black)."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for dep in sorted(graph.get(node, ())):
+            if state.get(dep) == 1:
+                return stack[stack.index(dep):] + [dep]
+            if dep not in state:
+                found = visit(dep)
+                if found:
+                    return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state:
+            found = visit(node)
+            if found:
+                return found
+    return None
+
+
+def test_no_import_cycle_between_modules():
+    graph = module_graph({_module_name(p): (p.read_text(), p.name == "__init__.py") for p in _modules()})
+    assert len(graph) > 50
+    cycle = find_cycle(graph)
+    assert cycle is None, "import cycle (imports inside functions counted): " + " → ".join(cycle)
+
+
+@pytest.mark.parametrize("sources", [
+    {"interphase.a": "from interphase.b import f\n", "interphase.b": "def g():\n    from interphase.a import h\n"},
+    {"interphase.p.a": "from .b import f\n", "interphase.p.b": "from .c import g\n",
+     "interphase.p.c": "def k():\n    from . import a\n"},
+    {"interphase.a": "import interphase.b\n", "interphase.b": "def k():\n    import interphase.a as x\n"},
+    # through a package's __init__: `from interphase import __version__` imports interphase/__init__.py
+    {"interphase": ("from interphase.api import run\n", True), "interphase.api": "def f():\n    from interphase.r import g\n",
+     "interphase.r": "from interphase import __version__\n"},
+])
+def test_the_cycle_checker_finds_a_cycle_closed_inside_a_function(sources):
+    sources = {k: v if isinstance(v, tuple) else (v, False) for k, v in sources.items()}
+    assert find_cycle(module_graph(sources)) is not None
+
+
+def test_the_cycle_checker_passes_a_chain():
+    sources = {"interphase": ("from interphase.version import __version__\n", True),
+               "interphase.a": ("from interphase.b import f\nfrom interphase import __version__\n", False),
+               "interphase.b": ("def g():\n    from .c import h\n", False),
+               "interphase.c": ("import numpy\nfrom interphase.version import __version__\n", False),
+               "interphase.version": ("__version__ = '0'\n", False)}
+    assert module_graph(sources) == {"interphase": {"interphase.version"}, "interphase.a": {"interphase.b", "interphase"},
+                                     "interphase.b": {"interphase.c"}, "interphase.c": {"interphase.version"},
+                                     "interphase.version": set()}
+    assert find_cycle(module_graph(sources)) is None

@@ -21,7 +21,7 @@ from interphase.tables import CONTACT_COLUMNS
 @pytest.fixture(scope="module")
 def peak_run(quick_campaign):
     """(campaign, folder, summary row, Case) of the strongest interface run of the quick campaign."""
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     campaign, store, summ = open_campaign(quick_campaign)
     try:
@@ -180,7 +180,7 @@ def test_cli_animate_writes_one_frame_per_contact_snapshot(quick_campaign, peak_
     # a case id prefix names the run too: --animate resolves every key with find_run before drawing
     # anything (build_animations), so the prefix is checked there, on the real summaries, without
     # drawing the same animation a second time
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
     from interphase.report.network import find_run
 
     _, store, summ = open_campaign(quick_campaign)

@@ -2,7 +2,7 @@
 
 import math
 
-from interphase.campaign.plan import inertial_estimate, quasi_static_speed, rate_warnings
+from interphase.analysis.quasistatic import inertial_estimate, quasi_static_speed, rate_warnings
 from interphase.case import Case
 from interphase.surface.spec import ProfileSpec
 

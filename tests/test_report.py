@@ -11,7 +11,8 @@ import pytest
 
 from interphase.campaign.schema import load_campaign
 from interphase.cli import main
-from interphase.report.build import report_from_summaries
+from interphase.errors import InputError
+from interphase.report.build import analyse, report_from_summaries
 from interphase.report.synthetic import synthetic_summaries
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,6 +111,9 @@ def test_lab_comparison_table(synthetic_report):
     assert len(lab) == 6
     assert lab["δ predicted [°]"].notna().all() and lab["δ measured [°]"].notna().all()
     assert (lab["tan φμ [-]"].iloc[:4] == 0.1).all() and (lab["tan φμ [-]"].iloc[4:] == 0.2).all()
+    assert (lab["φ from"] == "the campaign's simulated soil").all()
+    err = lab["δ predicted [°]"] - lab["δ measured [°]"]
+    assert np.allclose(lab["error [°]"], err)
 
 
 def test_too_few_points_draw_and_say_no_fit(tmp_path):
@@ -121,6 +125,20 @@ def test_too_few_points_draw_and_say_no_fit(tmp_path):
     assert not res.warnings or all(isinstance(w, str) for w in res.warnings)
 
 
+def test_the_analysis_is_a_model_of_tables_and_writes_nothing(tmp_path, monkeypatch):
+    """analyse: the report's content from a summaries table alone (no store, no folder); every
+    table the page shows is in the model, and nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    summ = synthetic_summaries(150, seed=11)
+    m = analyse(summ, n_boot=0)
+    assert list(tmp_path.iterdir()) == []
+    names = [t.name for t in m.tables]
+    assert "correlations" in names and [n for n in names if n.startswith("results_")]
+    assert len(m.points) == summ["test"].eq("interface").sum() and m.ensembles is None   # one seed a case
+    assert m.chain.theta_r and m.criterion_check is not None and m.n_box == 2
+    assert m.fits and all(f.spec is not None for f in m.fits)
+
+
 def test_empty_index_still_writes_a_report(tmp_path):
     summ = synthetic_summaries(3, seed=1).iloc[0:0]
     res = report_from_summaries(summ, tmp_path, n_boot=0)
@@ -129,19 +147,14 @@ def test_empty_index_still_writes_a_report(tmp_path):
 
 
 def test_bad_lab_file_names_the_column(tmp_path):
+    """The report reads the lab/ format (interphase.lab): a bad file fails before anything is written,
+    naming the file and the column."""
     bad = tmp_path / "lab.csv"
-    bad.write_text("theta_a_deg,material\n10,glass beads\n")
-    code = main(["report", str(ROOT / "campaigns" / "quick.toml"), "--out", str(tmp_path / "r"), "--lab", str(bad)]) \
-        if (ROOT / "runs" / "quick" / "index.sqlite").exists() else None
-    from interphase.errors import InputError
-    from interphase.report.lab import read_lab
-    with pytest.raises(InputError, match="tan_delta or an efficiency"):
-        read_lab(bad)
-    if code is not None:
-        assert code == 2
-    bad.write_text("theta_a_deg,tan_delta,material\n10,0.3,granite dust\n")
-    with pytest.raises(InputError, match="friction"):
-        read_lab(bad)
+    bad.write_text(LAB.read_text().replace("tan_delta_peak", "tan_delta_at_peak"))
+    out = tmp_path / "r"
+    with pytest.raises(InputError, match="delta_peak") as exc:
+        report_from_summaries(synthetic_summaries(3, seed=1), out, lab=bad, n_boot=0)
+    assert str(bad) in str(exc.value) and not out.exists()
 
 
 def test_cli_report_without_results_exit_2(tmp_path, capsys):
@@ -180,7 +193,11 @@ def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp
 
     res = build_report(quick_campaign, out=tmp_path / "rep", n_boot=9)
     s = pd.read_csv(res.folder / "tables" / "summaries.csv")
-    assert len(s) == 6 and list(s.columns[:4]) == ["case_id", "label", "group", "test"]
+    assert len(s) == 6 and list(s.columns[:5]) == ["case_id", "label", "physical_id", "group", "test"]
+    # a physical case's seeds share its id, and only they do
+    name = s["label"].str.replace(r"-s\d+$", "", regex=True)
+    assert s["physical_id"].notna().all() and s.groupby(["group", name])["physical_id"].nunique().eq(1).all()
+    assert s.groupby("physical_id")["seed"].nunique().eq(s.groupby("physical_id").size()).all()
     assert {"peak_stress_ratio", "theta_a_deg_92", "theta_r_surface_deg", "seed", "gradation", "friction_ps"} <= set(s.columns)
     box = s[s["test"].eq("box")].set_index("case_id")["peak_stress_ratio"]
     iface = s[s["test"].eq("interface")]

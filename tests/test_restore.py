@@ -17,8 +17,8 @@ from conftest import need_binary  # noqa: E402
 from interphase.analysis.ensemble import physical_case  # noqa: E402
 from interphase.campaign.store import CampaignStore  # noqa: E402
 from interphase.cli import main  # noqa: E402
-from interphase.report.build import open_campaign, write_curves, write_summaries  # noqa: E402
-from interphase.report.ensembles import ensemble_table  # noqa: E402
+from interphase.campaign.results import open_campaign, write_curves, write_summaries  # noqa: E402
+from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
 
 pytestmark = pytest.mark.liggghts
 

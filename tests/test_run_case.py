@@ -5,8 +5,9 @@ from __future__ import annotations
 import pytest
 
 from interphase.campaign import store as st
+from interphase.campaign.checks import load_case_file
 from interphase.campaign.runner import run_single
-from interphase.case import Case, load_case_file
+from interphase.case import Case
 from interphase.cli import main
 from interphase.errors import InputError
 from interphase.surface.spec import ProfileSpec

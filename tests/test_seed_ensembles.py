@@ -95,7 +95,7 @@ def test_seed_states_set_tan_delta_and_the_box_values():
 def test_box_tests_on_further_seeds_join_every_case_of_their_soil():
     # 3 interface seeds paired with box seeds 1-3, and [pairs] seeds 4-6 of the same soil (no
     # interface case pairs with them), plus a box test of another soil that must stay out
-    from interphase.report.ensembles import box_pools
+    from interphase.analysis.ensemble_table import box_pools
 
     summ = seeded_summaries(k=3, seeds=3)
     soil = dict(group="box", role="box", test="box", gradation="poly", normal_stress=1e5)
@@ -197,7 +197,8 @@ def test_panel_plots_one_point_per_case_with_x_bars_only_where_x_varies_by_seed(
 # ---- the real quick campaign (2 surfaces × 2 seeds, 2 box seeds; tests/conftest.py) ----------------
 @pytest.fixture(scope="module")
 def quick_ensemble(quick_campaign):
-    from interphase.report.build import ensemble_points, open_campaign
+    from interphase.campaign.results import open_campaign
+    from interphase.report.build import ensemble_points
 
     _, store, summ = open_campaign(quick_campaign)
     try:

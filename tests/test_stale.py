@@ -23,7 +23,8 @@ from interphase.campaign import run as run_mod
 from interphase.campaign.run import campaign_status, run_campaign
 from interphase.cli import main
 from interphase.recipe import RECIPE_VERSIONS
-from interphase.report.build import build_report, open_campaign, recipe_notes
+from interphase.campaign.results import open_campaign, recipe_notes
+from interphase.report.build import build_report
 
 pytestmark = pytest.mark.liggghts      # every test copies the session's real LIGGGHTS quick campaign
 

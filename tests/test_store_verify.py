@@ -68,7 +68,7 @@ def test_truncated_table_is_corrupt_unused_and_rerun(runs, capsys):
     (case,) = [c for c in data["cases"] if c["case_id"] == cid]
     assert case["status"] == "corrupt" and "contacts.parquet" in case["message"]
     # the report does not use it
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     _, store, summ = open_campaign(toml, output=out)
     store.close()

@@ -1,7 +1,8 @@
-"""surface/ as layers, held by parsing its modules (imports inside functions count too): no import
-cycle among them; the plain types and the units table at the bottom import no other surface module;
-a spec is data, so spec.py imports only those; files are opened by readers.py (and hashed by the
-builder). The checker is shown to find a cycle that only an import inside a function closes."""
+"""surface/ as layers, held by parsing its modules (imports inside functions count too): the plain
+types and the units table at the bottom import no other surface module; a spec is data, so spec.py
+imports only those; files are opened by readers.py (and hashed by the builder). That no module is
+in an import cycle is tests/test_import_rules.py's test (find_cycle); surface_graph is shown to give
+it a cycle that only an import inside a function closes."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_import_rules import imported_modules
+from tests.test_import_rules import find_cycle, imported_modules
 
 SURFACE = Path(__file__).resolve().parents[1] / "src" / "interphase" / "surface"
 PREFIX = "interphase.surface."
@@ -39,40 +40,8 @@ def surface_graph(sources: dict[str, str]) -> dict[str, set[str]]:
     return graph
 
 
-def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
-    """One import cycle as [a, b, …, a], or None (depth-first search, white/grey/black)."""
-    state: dict[str, int] = {}
-    stack: list[str] = []
-
-    def visit(node: str) -> list[str] | None:
-        state[node] = 1
-        stack.append(node)
-        for dep in sorted(graph.get(node, ())):
-            if state.get(dep) == 1:
-                return stack[stack.index(dep):] + [dep]
-            if dep not in state:
-                found = visit(dep)
-                if found:
-                    return found
-        stack.pop()
-        state[node] = 2
-        return None
-
-    for node in sorted(graph):
-        if node not in state:
-            found = visit(node)
-            if found:
-                return found
-    return None
-
-
 def _sources() -> dict[str, str]:
     return {p.stem: p.read_text() for p in sorted(SURFACE.glob("*.py")) if p.stem != "__init__"}
-
-
-def test_no_import_cycle_among_surface_modules():
-    cycle = find_cycle(surface_graph(_sources()))
-    assert cycle is None, "import cycle in surface/: " + " → ".join(cycle)
 
 
 def test_the_bottom_layers_and_the_spec_import_only_what_is_below_them():

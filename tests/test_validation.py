@@ -9,10 +9,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
-from interphase.errors import InputError
-from interphase.lab import profile_of, read_lab
+sys.path.insert(0, str(Path(__file__).parent))
+from conftest import need_binary  # noqa: E402
+
+from interphase.errors import InputError  # noqa: E402
+from interphase.lab import profile_of, read_lab  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 HEAD = ("soil,d50_mm,surface,asperity_height_mm,asperity_width_mm,root_spacing_mm,normal_stress_kpa,"
@@ -91,3 +95,29 @@ def test_validate_prints_criterion_and_baselines(tmp_path):
     assert {s["prediction"] for s in res["skill"]} == {"criterion", "δ = φ (soil)", "δ = min(φμ + θa, φ)"}
     assert res["largest_miss"]["row"] in (2, 3, 4)
     assert (tmp_path / "v" / "validation.png").stat().st_size > 10_000
+
+
+@pytest.mark.liggghts
+def test_simulate_runs_each_row_on_the_card_and_resumes(tmp_path):
+    """--simulate's machinery with real LIGGGHTS on the suite's tiny card and a tiny cell: one
+    synthetic saw-tooth row and one flat row, one seed each; a second call reruns nothing."""
+    from interphase.analysis.validation import predict_rows
+    from interphase.campaign.validate import PROTOCOL, simulate, with_dem
+    from interphase.report.build import criterion_model
+    from interphase.soil import load_card
+
+    need_binary("liggghts")
+    table = read_lab(_write(tmp_path, GOOD[:2]))
+    card = load_card(ROOT / "tests" / "data" / "soils" / "tiny_card.toml")
+    tiny = PROTOCOL | {"box_length_d50": 12.0, "box_height_d50": 8.0, "shear_velocity": 0.05, "shear_distance": 0.002}
+    dem = simulate(table, card, [1], output=tmp_path / "sim", protocol=tiny)
+    assert sorted(dem["row"]) == [2, 3]
+    d = dem.set_index("row")
+    assert (d["dem_seeds"] == 1).all() and d["delta_dem_deg"].between(1, 60).all()
+    assert d.loc[2, "delta_dem_deg"] > d.loc[3, "delta_dem_deg"]       # teeth grip more than a flat plate
+    done = sorted((tmp_path / "sim").rglob("DONE"))
+    again = simulate(table, card, [1], output=tmp_path / "sim", protocol=tiny)
+    assert sorted((tmp_path / "sim").rglob("DONE")) == done
+    pd.testing.assert_frame_equal(again, dem)
+    df = with_dem(predict_rows(table, lambda mu: criterion_model(mu, None), card), dem)
+    assert df["error_dem_deg"].to_numpy() == pytest.approx((df["delta_dem_deg"] - df["delta_measured_deg"]).to_numpy())

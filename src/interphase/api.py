@@ -47,8 +47,9 @@ def _campaign(campaign, runs=None):
 
 def plan(campaign, engine: str | None = None, *, lazy: bool = False):
     """The planned runs of a campaign: `PlannedCase(case_id, engine, case, group, role, label,
-    pair_id, params)`, box tests first. The case id hashes the case's inputs, the engine and its
-    recipe: the same on every machine. `lazy=True` gives a generator (any size, built one case at a
+    pair_id, physical_id, params)`, box tests first. The case id hashes the case's inputs, the engine
+    and its recipe: the same on every machine; the physical id hashes the inputs without the seed
+    (every seed of a case shares it: what the ensembles pool). `lazy=True` gives a generator (any size, built one case at a
     time); else a list. `engine` replaces the file's engines."""
     from interphase.campaign.plan import iter_plan
     from interphase.campaign.plan import plan as _plan
@@ -93,7 +94,7 @@ def summaries(campaign, *, runs: PathLike | None = None):
     report's tables/summaries.csv): the case's parameters (SI) and its summary (peak_stress_ratio,
     tan_delta-like ratios [-], theta_r_*_deg, shear_disp_at_peak [m], …), `pair_id` = its box
     test. Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     c = _campaign(campaign, runs)
     _, store, rows = open_campaign(c.path, c.output)
@@ -105,15 +106,10 @@ def ensembles(campaign, *, runs: PathLike | None = None):
     """One row per physical case (its seeds pooled): tan δ, tan φ and E at the peak and at the
     critical state, each with its 95 % interval and the number of seeds (the report's ensembles
     table; docs/methods.md). Raises InputError when nothing has run."""
-    from interphase.report.build import open_campaign
-    from interphase.report.ensembles import ensemble_tables
+    from interphase.campaign.results import campaign_ensembles
 
     c = _campaign(campaign, runs)
-    _, store, rows = open_campaign(c.path, c.output)
-    try:
-        return ensemble_tables(rows, store)[0]
-    finally:
-        store.close()
+    return campaign_ensembles(c.path, c.output)
 
 
 def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,
@@ -156,3 +152,71 @@ def calibrate(target: PathLike, *, quick: bool = False, card: PathLike | None = 
     from interphase.campaign.calibrate import calibrate as _calibrate
 
     return _calibrate(target, quick=quick, card_path=card, output=runs)
+
+
+#: shipped soil cards by a laboratory soil's name (soils/ of the source tree or the working folder)
+SHIPPED_CARDS = (("ottawa", "ottawa-20-30.toml"), ("glass", "glass-beads-0.7.toml"))
+
+
+def _shipped_card(soils):
+    """The one shipped card whose name matches every soil of a lab file, or None."""
+    found = set()
+    for soil in soils:
+        name = next((card for key, card in SHIPPED_CARDS if key in str(soil).lower()), None)
+        roots = (Path.cwd() / "soils", Path(__file__).resolve().parents[2] / "soils")
+        found.add(next((r / name for r in roots if name and (r / name).is_file()), None))
+    return found.pop() if len(found) == 1 else None
+
+
+def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = None, simulate: bool = False,
+             seeds: int = 3, output: PathLike | None = None, executor: str | None = None, jobs: int | None = None,
+             stream=None) -> dict:
+    """The criterion (and with `simulate`, the DEM on the soil card) against a laboratory file
+    (lab/README.md; docs/validation.md), as `campaign validate`. Returns a dict: table (DataFrame, one
+    row per test: δ measured, predicted with its interval, both baselines, errors [°]), skill
+    (DataFrame), largest_miss, notes, folder and files written (validation.csv, skill.csv,
+    validation.md, validation.png/.pdf under `output`, default runs/validate/<file name>)."""
+    from interphase.analysis.validation import largest_miss, predict_rows, skill
+    from interphase.errors import InputError
+    from interphase.lab import read_lab
+    from interphase.report.build import criterion_model
+    from interphase.report.validation import markdown, validation_figure
+    from interphase.soil import load_card
+
+    table = read_lab(lab)
+    out = Path(output) if output else Path("runs") / "validate" / table.path.stem
+    notes: list[str] = []
+    card = load_card(soil) if soil else None
+    if card is None:
+        shipped = _shipped_card(sorted(set(table.rows["soil"])))
+        card = load_card(shipped) if shipped else None
+        if card is not None:
+            notes.append(f"soil card: {card.path} (shipped, chosen by the soil's name; soil= to choose)")
+        elif simulate or table.rows["soil_phi_peak"].isna().any():
+            raise InputError(f"no single shipped card for the soils {', '.join(sorted(set(table.rows['soil'])))}",
+                             where="--soil", fix="give --soil soils/NAME.toml")
+    models: dict = {}
+    model_for = lambda mu: models[mu] if mu in models else models.setdefault(mu, criterion_model(mu, fit))
+    df = predict_rows(table, model_for, card)
+    notes += sorted({f"criterion: {m.source}" for m in models.values()})
+    if simulate:
+        from interphase.campaign.validate import simulate as _simulate, with_dem
+
+        df = with_dem(df, _simulate(table, card, range(1, int(seeds) + 1), output=out / "runs", executor=executor,
+                                    jobs=jobs, stream=stream))
+    sk = skill(df)
+    out.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out / "validation.csv", index=False)
+    sk.to_csv(out / "skill.csv", index=False)
+    cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
+            "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
+            "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
+            "delta_soil_deg": "δ = φ [°]"}
+    if "delta_dem_deg" in df:
+        cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
+    (out / "validation.md").write_text(markdown(df, cols) + "\n" + markdown(sk, {
+        "subset": "rows", "prediction": "prediction", "n": "n", "rms_deg": "rms [°]", "max_abs_deg": "max [°]",
+        "within_4": "share within 4°"}))
+    files = [out / "validation.csv", out / "skill.csv", out / "validation.md", *validation_figure(df, out)]
+    return {"lab": str(table.path), "rows": len(df), "folder": out, "notes": notes, "table": df, "skill": sk,
+            "largest_miss": largest_miss(df), "files": files}

@@ -283,6 +283,17 @@ def case_id(case: Case, engine: str, recipe_id: str, length: int = 12) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()[:length]
 
 
+
+def physical_id(case: Case, length: int = 12) -> str:
+    """Short hash of the PHYSICAL case: the canonical inputs without the packing seed, the start
+    reduced to the engine whose specimen it takes (the source run's id carries its seed). Every seed
+    of one physical case has it, whatever engine or recipe runs it: what seed ensembles pool by."""
+    inputs = case.canonical()
+    inputs.pop("seed", None)
+    if "start" in inputs:
+        inputs["start"] = {"engine": inputs["start"]["engine"]}
+    return hashlib.sha256(canonical_json({"physical_case": inputs}).encode()).hexdigest()[:length]
+
 #: Case fields the plan sets, never a campaign's [case] table → what to write instead
 PLANNED_FIELDS = {"start": 'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"'}
 
@@ -377,25 +388,3 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
         if isinstance(value, int) and not isinstance(value, bool) and fields[key].type in ("float", float):
             kwargs[key] = float(value)
     return Case(**kwargs)
-
-
-def load_case_file(path) -> Case:
-    """The Case of a TOML file's [case] table (Case fields, SI units; a profile file's path is
-    relative to the TOML file). Every problem is an InputError naming the file."""
-    import tomllib
-    from pathlib import Path
-
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except FileNotFoundError:
-        raise InputError("file not found", where=str(path), fix="give a TOML file with a [case] table") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"TOML syntax error: {exc}", where=str(path)) from None
-    if "case" not in data or not isinstance(data["case"], dict):
-        raise InputError("no [case] table", where=str(path), fix="put the Case fields under [case]")
-    from interphase.campaign.checks import input_errors
-
-    case = case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
-    input_errors([case], where=f"{path}: [case]: case")
-    return case

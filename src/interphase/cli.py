@@ -10,8 +10,8 @@ import argparse
 import json
 import sys
 
-from interphase import __version__
 from interphase.errors import InputError
+from interphase.version import __version__
 
 
 def _jsonable(obj):
@@ -229,8 +229,7 @@ def _add_engine(sub) -> None:
 
 def _load_case(path: str):
     """(Case, warnings) of a case file: the checks `campaign run` makes on a campaign's cases."""
-    from interphase.campaign.checks import case_file_warnings
-    from interphase.case import load_case_file
+    from interphase.campaign.checks import case_file_warnings, load_case_file
 
     case = load_case_file(path)
     warnings = case_file_warnings(path, case)
@@ -355,10 +354,12 @@ def _cmd_campaign_status(args) -> int:
                          where=args.campaign, fix=f"run `campaign run {args.campaign}` first, or give --runs DIR "
                          "where its runs are")
     counts = df["status"].value_counts().to_dict()
+    seeds = df.attrs.get("seeds")
     if args.json:
+        extra = {} if seeds is None else {"seeds": seeds.astype(object).where(seeds.notna(), None).to_dict(orient="records")}
         _print_json({"campaign": campaign.name, "runs": str(campaign.output), "runs_from": campaign.output_from,
                      "counts": counts,
-                     "cases": df.astype(object).where(df.notna(), None).to_dict(orient="records")})
+                     "cases": df.astype(object).where(df.notna(), None).to_dict(orient="records"), **extra})
         return 0
     import shutil
 
@@ -375,7 +376,28 @@ def _cmd_campaign_status(args) -> int:
     for kind, rows in stale.groupby("cause"):   # one line per kind: a recipe change makes every case stale
         print(_wrap(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
                     width))
+    if seeds is not None:
+        for line in seed_rows(seeds, width):
+            print(line)
     return 0
+
+
+def seed_rows(seeds, width: int = 80) -> list[str]:
+    """Sequential seeds ([seeds]): one line per physical case: seeds finished / asked for, the
+    interval of the target quantity at the last round judged and its half-width, the state."""
+    if seeds.empty:
+        return []
+    r0 = seeds.iloc[0]
+    lines = [f"seeds: target ± {r0.target:g} in {r0.quantity}, cap {int(r0.cap)} seeds",
+             f"{'case':<{width - 58}} {'seeds':>9} {r0.quantity:>7} {'95 % interval':>15} {'± half':>7}  state"]
+    room = width - 58
+    for r in seeds.itertuples():
+        name = f"{r.group}/{r.case}"
+        name = name if len(name) <= room else "…" + name[len(name) - room + 1:]
+        ival = f"{r.lo:.3f}–{r.hi:.3f}" if r.lo == r.lo and r.hi == r.hi else "–"
+        lines.append(f"{name:<{room}} {f'{r.finished}/{r.wanted}':>9} {r.value:>7.3f} {ival:>15} "
+                     f"{r.halfwidth:>7.3f}  {r.state}")
+    return lines
 
 
 def status_rows(df, width: int = 80) -> list[str]:
@@ -453,8 +475,8 @@ def _add_report(sub) -> None:
     p.add_argument("-o", "--output", "--out", dest="output", default=None, metavar="DIR",
                    help="the report folder to write (default: RUNS/report)")
     p.add_argument("--runs", default=None, metavar="DIR", help=RUNS_HELP)
-    p.add_argument("--lab", default=None, help="laboratory CSV: theta_a_deg, tan_delta or efficiency, material "
-                   "[, friction, tan_phi] — overlaid on Fig. 6.10 and tabulated against the prediction")
+    p.add_argument("--lab", default=None, help="laboratory CSV (lab/README.md: published tests with their surfaces' "
+                   "geometry) — overlaid on Fig. 6.10 and tabulated against the prediction and both baselines")
     p.add_argument("--bootstrap", type=int, default=199, help="bootstrap refits per correlation (default 199)")
     p.add_argument("--animate", action="append", default=None, metavar="LABEL_OR_ID",
                    help="write only figures/animation_<label>.gif of this run (label or case id; repeatable): "

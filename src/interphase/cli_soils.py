@@ -106,87 +106,25 @@ def _cmd_calibrate(args, print_json) -> int:
     return 0
 
 
-SHIPPED_CARDS = (("ottawa", "ottawa-20-30.toml"), ("glass", "glass-beads-0.7.toml"))
-
-
-def shipped_card(soil: str):
-    """The shipped card of a laboratory soil's name (soils/ beside the package's source tree or the
-    working folder), or None."""
-    from pathlib import Path
-
-    name = next((card for key, card in SHIPPED_CARDS if key in soil.lower()), None)
-    if name is None:
-        return None
-    for root in (Path.cwd() / "soils", Path(__file__).resolve().parents[2] / "soils"):
-        if (root / name).is_file():
-            return root / name
-    return None
-
-
 def _cmd_validate(args, print_json) -> int:
     import json
-    from pathlib import Path
 
-    from interphase.analysis.validation import largest_miss, predict_rows, skill
-    from interphase.errors import InputError
-    from interphase.lab import read_lab
-    from interphase.report.build import criterion_model
-    from interphase.report.validation import markdown, validation_figure
-    from interphase.soil import load_card
-
+    from interphase.api import validate
     _check_seeds(args.seeds)
-    table = read_lab(args.lab)
-    out = Path(args.output) if args.output else Path("runs") / "validate" / table.path.stem
-    notes = []
-    if args.soil:
-        card = load_card(args.soil)
-    else:
-        soils = sorted(set(table.rows["soil"]))
-        found = {s: shipped_card(s) for s in soils}
-        paths = {p for p in found.values() if p is not None}
-        card = load_card(next(iter(paths))) if len(paths) == 1 else None
-        if card is not None:
-            notes.append(f"soil card: {card.path} (shipped, chosen by the soil's name; --soil to choose)")
-        elif args.simulate or table.rows["soil_phi_peak"].isna().any():
-            raise InputError(f"no single shipped card for the soils {', '.join(soils)}", where="--soil",
-                             fix="give --soil soils/NAME.toml")
-    models: dict = {}
-    model_for = lambda mu: models[mu] if mu in models else models.setdefault(mu, criterion_model(mu, args.fit))
-    df = predict_rows(table, model_for, card)
-    notes += sorted({f"criterion: {m.source}" for m in models.values()})
-    if args.simulate:
-        from interphase.campaign.validate import simulate, with_dem
-
-        dem = simulate(table, card, range(1, args.seeds + 1), output=out / "runs", executor=args.executor,
-                       jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
-        df = with_dem(df, dem)
-    sk = skill(df)
-    miss = largest_miss(df)
-    out.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out / "validation.csv", index=False)
-    sk.to_csv(out / "skill.csv", index=False)
-    figs = validation_figure(df, out)
-    result = {"lab": str(table.path), "rows": len(df), "output": str(out), "notes": notes,
-              "table": json.loads(df.to_json(orient="records")), "skill": json.loads(sk.to_json(orient="records")),
-              "largest_miss": miss, "figures": [str(f) for f in figs]}
+    res = validate(args.lab, soil=args.soil, fit=args.fit, simulate=args.simulate, seeds=args.seeds,
+                   output=args.output, executor=args.executor, jobs=args.jobs,
+                   stream=sys.stderr if args.json else sys.stdout)
+    df, sk, miss = res["table"], res["skill"], res["largest_miss"]
     if args.json:
-        print_json(result)
+        print_json(res | {"table": json.loads(df.to_json(orient="records")),
+                          "skill": json.loads(sk.to_json(orient="records")), "folder": str(res["folder"]),
+                          "files": [str(f) for f in res["files"]]})
         return 0
-    cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
-            "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
-            "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
-            "delta_soil_deg": "δ = φ [°]"}
-    if "delta_dem_deg" in df:
-        cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
-    text = markdown(df, cols) + "\n" + markdown(sk, {"subset": "rows", "prediction": "prediction", "n": "n",
-                                                     "rms_deg": "rms [°]", "max_abs_deg": "max [°]",
-                                                     "within_4": "share within 4°"})
-    (out / "validation.md").write_text(text)
-    print(text)
-    for n in notes:
+    print((res["folder"] / "validation.md").read_text())
+    for n in res["notes"]:
         print("note:", n)
     if miss:
         print(f"largest miss: line {miss['row']} ({miss['soil']}, {miss['surface']}, {miss['normal_stress_kpa']:g} kPa): "
               f"{miss['error_deg']:+.1f}° ({miss['source']}, {miss['table_or_figure']})")
-    print(f"written: {out / 'validation.csv'}, {out / 'skill.csv'}, {out / 'validation.md'}, {figs[0]}")
+    print("written: " + ", ".join(str(f) for f in res["files"]))
     return 0

@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
-from interphase.analysis.ensemble import MIN_SEEDS, physical_case, ratio_interval, seed_interval
+from interphase.analysis.ensemble import MIN_SEEDS, physical_case, physical_ids, ratio_interval, seed_interval
 
 MIN_SIDE = 3          # points on each side of the breakpoint (docs/methods.md §7)
 MIN_POINTS = 7        # fewer points: no fit (a hinge has 4 parameters, c included)
@@ -426,6 +426,7 @@ def prepare_points(summaries: pd.DataFrame) -> pd.DataFrame:
         pts["theta_r_over_theta_a"] = np.where(pts["theta_a_deg_90"] > 0,
                                                pts["theta_r_surface_deg"] / pts["theta_a_deg_90"], np.nan)
     pts["physical_case"] = _col(pts, "label", "").map(physical_case) if len(pts) else pd.Series(dtype=str)
+    pts["physical_id"] = physical_ids(pts) if len(pts) else pd.Series(dtype=str)
     return pts.reset_index(drop=True)
 
 
@@ -503,7 +504,7 @@ def _draw_means(mat: np.ndarray, n: np.ndarray, rng, n_boot: int) -> np.ndarray:
 
 @dataclass
 class SeedEnsemble:
-    """A campaign's interface runs grouped by physical case (group, label without `-sN`).
+    """A campaign's interface runs grouped by physical case (group, physical_id; named by the label without `-sN`).
 
     points  one row per physical case, index 0..K−1 (= column `case_index`): every AVERAGED column is
             the mean over its seeds, with `<col>_lo`/`<col>_hi` (95 %, analysis.ensemble.seed_interval:
@@ -568,22 +569,23 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     states     optional {case_id: value}: each interface run's peak state and each box run's (the value
                its ensemble's peak averages, analysis.ensemble.seed_peak_states); without it each
                run's own peak stress ratio stands in.
-    ensembles  optional table of report.ensembles (group, case, tan_delta…, tan_phi…, E…): its tan δ,
+    ensembles  optional table of analysis.ensemble_table (group, case, tan_delta…, tan_phi…, E…): its tan δ,
                tan φ and E with their intervals replace the ones computed here (they agree when
                `states` came from the same curves), so each E carries its box test's interval.
     box_pools  optional {pair_id: every box test of that soil}: a case's box ensemble is the union of
                its pair_ids' pools, so soil tests run on more seeds than the interface cases
-               ([pairs] seeds) all count (report.ensembles.box_pools); without it, the pair_ids.
+               ([pairs] seeds) all count (analysis.ensemble_table.box_pools); without it, the pair_ids.
     Without `ensembles`, E's interval is that of a ratio of independent seed means
     (analysis.ensemble.ratio_interval), as analysis.ensemble.ensemble_efficiency."""
     runs = runs.copy().reset_index(drop=True)
     if "physical_case" not in runs:
         runs["physical_case"] = _col(runs, "label", "").map(physical_case)
+    runs["physical_id"] = physical_ids(runs) if len(runs) else pd.Series(dtype=str)
     if "group" not in runs:
         runs["group"] = ""
     runs["group"] = runs["group"].astype(str)
-    keys = runs[["group", "physical_case"]].astype(str)
-    names = keys.drop_duplicates().sort_values(["group", "physical_case"]).reset_index(drop=True)
+    keys = runs[["group", "physical_case", "physical_id"]].astype(str)     # pooled by id, ordered by name
+    names = keys.drop_duplicates().sort_values(["group", "physical_case", "physical_id"]).reset_index(drop=True)
     k = len(names)
     code_of = {tuple(r): i for i, r in enumerate(names.itertuples(index=False, name=None))}
     codes = np.array([code_of[tuple(r)] for r in keys.itertuples(index=False, name=None)], dtype=int)
@@ -594,33 +596,8 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
         runs["tan_delta_seed"] = runs["case_id"].astype(str).map(state_of).astype(float)
     else:
         runs["tan_delta_seed"] = peak.astype(float)
-    # box ensembles: the distinct sets of pair_ids of the physical cases
-    pair = _col(runs, "pair_id", None)
-    box_val = (pair.astype(object).map(lambda b: state_of.get(str(b), np.nan) if b is not None and b == b else np.nan)
-               if state_of is not None else pd.to_numeric(_col(runs, "tan_phi"), errors="coerce"))
-    box_sets, box_of_case = {}, np.full(k, -1)
-    box_members: list[dict] = []
-    for i, (ids, vals) in enumerate(zip(pd.Series(pair.to_numpy()).groupby(codes), pd.Series(box_val.to_numpy()).groupby(codes))):
-        pids = {str(b) for b in ids[1] if b is not None and b == b}
-        pooled = sorted({m for p in pids for m in (box_pools.get(p, (p,)) if box_pools else (p,))})
-        if state_of is not None:
-            members = {b: float(state_of.get(b, np.nan)) for b in pooled}
-        else:
-            members = {str(b): float(v) for b, v in zip(ids[1], vals[1]) if b is not None and b == b}
-        members = {b: v for b, v in members.items() if math.isfinite(v)}
-        if not members:
-            continue
-        key = tuple(sorted(members))
-        if key not in box_sets:
-            box_sets[key] = len(box_members)
-            box_members.append(members)
-        box_of_case[ids[0]] = box_sets[key]
-    m = len(box_members)
-    width = max((len(b) for b in box_members), default=1)
-    box_values = np.full((m, width), np.nan)
-    for j, b in enumerate(box_members):
-        box_values[j, :len(b)] = [b[x] for x in sorted(b)]
-    box_counts = np.array([len(b) for b in box_members], dtype=int)
+    box_values, box_counts, box_of_case = _box_ensembles(runs, codes, k, state_of, box_pools)
+    m, width = box_values.shape
 
     pts = names.copy()
     first = runs.groupby("case_index", sort=True).first()
@@ -657,16 +634,53 @@ def seed_ensemble(runs: pd.DataFrame, states=None, ensembles: pd.DataFrame | Non
     lo, hi = np.where(few, np.nan, lo), np.where(few, np.nan, hi)
     pts["efficiency_lo"], pts["efficiency_hi"] = (np.where(has, lo, np.nan), np.where(has, hi, np.nan)) if k else ([], [])
     if ensembles is not None and len(ensembles) and k:
-        tab = ensembles.assign(group=ensembles["group"].astype(str), case=ensembles["case"].astype(str))
-        tab = tab.set_index(["group", "case"])
-        idx = pd.MultiIndex.from_frame(pts[["group", "physical_case"]].astype(str))
-        for mine, theirs in (("efficiency", "E"), ("peak_stress_ratio", "tan_delta"), ("tan_phi", "tan_phi")):
-            for suffix in ("", "_lo", "_hi"):
-                if theirs + suffix in tab:
-                    got = pd.to_numeric(tab[theirs + suffix], errors="coerce").reindex(idx).to_numpy(float)
-                    pts[mine + suffix] = np.where(np.isnan(got) & ~idx.isin(tab.index), pts[mine + suffix], got)
+        _take_from_table(pts, ensembles)
     ens.points = pts
     return ens
+
+
+def _box_ensembles(runs: pd.DataFrame, codes: np.ndarray, k: int, state_of, box_pools):
+    """(box_values [m × width, NaN-padded], box_counts [m], box_of_case [k], −1 for none): the
+    distinct box ensembles of the k physical cases, each the union of its pair_ids' pools."""
+    pair = _col(runs, "pair_id", None)
+    box_val = (pair.astype(object).map(lambda b: state_of.get(str(b), np.nan) if b is not None and b == b else np.nan)
+               if state_of is not None else pd.to_numeric(_col(runs, "tan_phi"), errors="coerce"))
+    box_sets, box_of_case = {}, np.full(k, -1)
+    box_members: list[dict] = []
+    for ids, vals in zip(pd.Series(pair.to_numpy()).groupby(codes), pd.Series(box_val.to_numpy()).groupby(codes)):
+        pids = {str(b) for b in ids[1] if b is not None and b == b}
+        pooled = sorted({m for p in pids for m in (box_pools.get(p, (p,)) if box_pools else (p,))})
+        if state_of is not None:
+            members = {b: float(state_of.get(b, np.nan)) for b in pooled}
+        else:
+            members = {str(b): float(v) for b, v in zip(ids[1], vals[1]) if b is not None and b == b}
+        members = {b: v for b, v in members.items() if math.isfinite(v)}
+        if not members:
+            continue
+        key = tuple(sorted(members))
+        if key not in box_sets:
+            box_sets[key] = len(box_members)
+            box_members.append(members)
+        box_of_case[ids[0]] = box_sets[key]
+    width = max((len(b) for b in box_members), default=1)
+    box_values = np.full((len(box_members), width), np.nan)
+    for j, b in enumerate(box_members):
+        box_values[j, :len(b)] = [b[x] for x in sorted(b)]
+    return box_values, np.array([len(b) for b in box_members], dtype=int), box_of_case
+
+
+def _take_from_table(pts: pd.DataFrame, ensembles: pd.DataFrame) -> None:
+    """tan δ, tan φ and E with their intervals from the ensembles table (analysis.ensemble_table), by
+    physical case (its physical_id; by name for a table without one), in place."""
+    key = ("physical_id", "physical_id") if "physical_id" in ensembles else ("case", "physical_case")
+    tab = ensembles.assign(group=ensembles["group"].astype(str), **{key[0]: ensembles[key[0]].astype(str)})
+    tab = tab.set_index(["group", key[0]])
+    idx = pd.MultiIndex.from_frame(pts[["group", key[1]]].astype(str))
+    for mine, theirs in (("efficiency", "E"), ("peak_stress_ratio", "tan_delta"), ("tan_phi", "tan_phi")):
+        for suffix in ("", "_lo", "_hi"):
+            if theirs + suffix in tab:
+                got = pd.to_numeric(tab[theirs + suffix], errors="coerce").reindex(idx).to_numpy(float)
+                pts[mine + suffix] = np.where(np.isnan(got) & ~idx.isin(tab.index), pts[mine + suffix], got)
 
 
 def of_gradation(points: pd.DataFrame, gradation: str | None) -> pd.DataFrame:

@@ -32,6 +32,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 
 from interphase.analysis.strength import moving_average
@@ -241,10 +242,23 @@ def ensemble_efficiency(interface_curves, box_curves, window: float, *,
 
 # ---- additions for the report's per-case points (analysis.correlations.seed_ensemble) --------------
 def physical_case(label: str) -> str:
-    """A case label without its packing seed (`…-s3`): the physical case its seeds share."""
+    """A case label without its packing seed (`…-s3`): the NAME of the physical case its seeds share
+    (tables and figures show it; runs are pooled by `physical_ids`)."""
     import re
 
     return re.sub(r"-s\d+$", "", str(label))
+
+
+def physical_ids(runs: pd.DataFrame) -> pd.Series:
+    """Each run's physical case: its `physical_id` (interphase.case.physical_id, set at plan time;
+    campaign.results fills it in for runs indexed before it existed), else — a table without the
+    column, as tests build them — its name (`physical_case` of the label) marked "name:"."""
+    label = runs["label"] if "label" in runs else pd.Series("", index=runs.index)
+    names = "name:" + label.map(physical_case).astype(str)
+    if "physical_id" not in runs:
+        return names
+    have = runs["physical_id"]
+    return have.where(have.notna() & have.astype(str).ne(""), names).astype(str)
 
 
 def seed_states(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,

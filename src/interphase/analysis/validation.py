@@ -53,10 +53,11 @@ def card_phi(card, normal_stress: float) -> tuple[float, str]:
     return phi, f"card {card.name}: element test at {s / 1e3:g} kPa"
 
 
-def predict_rows(table, model_for, card=None) -> pd.DataFrame:
+def predict_rows(table, model_for, card=None, default_phi: tuple[float, str] | None = None) -> pd.DataFrame:
     """One row per laboratory test: measured δ, the criterion's δ with its interval, both baselines
     and their errors. `model_for(tan φμ)`: a CriterionModel (its tan φ is replaced per row); `card`:
-    SoilCard for rows without the laboratory's own soil φ."""
+    SoilCard for rows without the laboratory's own soil φ; `default_phi` = (φ [°], where from) for
+    rows with neither (the report: its campaign's simulated soil)."""
     from interphase.analysis.criterion import predict_profile
     from interphase.lab import profile_of
 
@@ -67,6 +68,8 @@ def predict_rows(table, model_for, card=None) -> pd.DataFrame:
             phi, phi_from = float(r["soil_phi_peak"]), "the laboratory's own soil test"
         elif card is not None:
             phi, phi_from = card_phi(card, float(r["normal_stress"]))
+        elif default_phi is not None:
+            phi, phi_from = default_phi
         else:
             raise InputError("no soil friction angle for this row", where=f"{table.path}:{r['row']}: soil_phi_peak_deg",
                              fix="give the laboratory's soil_phi_peak_deg, or --soil CARD")
@@ -94,6 +97,7 @@ def predict_rows(table, model_for, card=None) -> pd.DataFrame:
             row |= {"theta_a_deg": theta_a, "theta_r_deg": math.nan, "efficiency": math.nan, "efficiency_lo": math.nan,
                     "efficiency_hi": math.nan, "delta_predicted_deg": math.nan, "delta_lo_deg": math.nan,
                     "delta_hi_deg": math.nan, "branch": "", "note": str(exc)}
+        row["efficiency_measured"] = math.tan(math.radians(row["delta_measured_deg"])) / math.tan(math.radians(phi))
         row["delta_soil_deg"] = phi
         row["delta_rule_deg"] = min(math.degrees(math.atan(mu)) + theta_a, phi)
         out.append(row)

@@ -160,6 +160,42 @@ def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
     return float(np.interp(q * cw[-1], cw, x[order]))
 
 
+def _posterior(calib, names: list[str], target) -> tuple[dict, dict, float]:
+    """(chosen parameters, posterior per parameter {mean, lo, hi}, effective sample size) of the last
+    iteration's weighted samples."""
+    post = np.asarray(calib.inference.posterior if getattr(calib.inference, "posterior", None) is not None
+                      else calib.inference.Bayes_filter.get_posterior_at_time(), float).ravel()
+    params = np.asarray(calib.system.param_data, float)
+    # the card takes the posterior mean: the most probable single sample is the one whose few seeds
+    # happened to land nearest the target (measured: docs/soils.md, the recovery test)
+    chosen = {n: round(float(post @ params[:, j]), 4) for j, n in enumerate(names)}
+    # 95 % credible intervals: weighted quantiles of the last iteration's samples (clipped to the
+    # range: GrainLearning's normalisation leaves its bounds off by an ulp)
+    posterior = {n: {"mean": float(post @ params[:, j]),
+                     **{k: float(np.clip(_weighted_quantile(params[:, j], post, q), *target.free[n]))
+                        for k, q in (("lo", 0.025), ("hi", 0.975))}} for j, n in enumerate(names)}
+    ess = float(1.0 / np.sum(post ** 2)) if post.sum() > 0 else math.nan
+    return chosen, posterior, ess
+
+
+def _final_checks(card: SoilCard, target, n_seeds: int, executor, jobs, stream):
+    """The chosen grains' element test at the target stress and every held-out one (the runs folder
+    `campaign element` uses): (final ElementResult, achieved checks, verification entries, runs)."""
+    seeds = range(1, n_seeds + 1)
+    print(f"calibrate {target.name}: the chosen grains' element test at {target.normal_stress / 1e3:g} kPa, "
+          f"{len(seeds)} seeds", file=stream, flush=True)
+    final, *held_out = run_element(card, [target.normal_stress, *(v["normal_stress"] for v in target.verification)],
+                                   seeds, output=Path("runs") / "element" / target.name, executor=executor, jobs=jobs,
+                                   stream=stream)
+    achieved = [{"quantity": c["quantity"], "target": c["laboratory"], "value": c["measured"], "lo": c["lo"],
+                 "hi": c["hi"], "difference": c["difference"], "verdict": c["verdict"]}
+                for c in compare(target.values, final)]
+    verification = [{**v, "measured": {k: val for k, val in r.to_dict().items()
+                                       if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")},
+                     "checks": compare(v, r)} for v, r in zip(target.verification, held_out)]
+    return final, achieved, verification, len(seeds) * (1 + len(target.verification))
+
+
 def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
               stream=None) -> dict:
     """Calibrate, write the soil card, return what it holds (JSON data)."""
@@ -221,35 +257,12 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
                                    "slice_sampling": False}},
     })
     _quiet(lambda: _iterate(calib, int(budget["iterations"])))
-    post = np.asarray(calib.inference.posterior if getattr(calib.inference, "posterior", None) is not None
-                      else calib.inference.Bayes_filter.get_posterior_at_time(), float).ravel()
-    params = np.asarray(calib.system.param_data, float)
-    # the card takes the posterior mean: the most probable single sample is the one whose few seeds
-    # happened to land nearest the target (measured: docs/soils.md, the recovery test)
-    chosen = {n: round(float(post @ params[:, j]), 4) for j, n in enumerate(names)}
-    # 95 % credible intervals: weighted quantiles of the last iteration's samples (clipped to the
-    # range: GrainLearning's normalisation leaves its bounds off by an ulp)
-    posterior = {n: {"mean": float(post @ params[:, j]),
-                     **{k: float(np.clip(_weighted_quantile(params[:, j], post, q), *target.free[n]))
-                        for k, q in (("lo", 0.025), ("hi", 0.975))}} for j, n in enumerate(names)}
-    ess = float(1.0 / np.sum(post ** 2)) if post.sum() > 0 else math.nan
+    chosen, posterior, ess = _posterior(calib, names, target)
 
     card = SoilCard(name=target.name, path=card_path, soil={**target.soil, **chosen}, element=target.element)
-    seeds = range(1, int(budget["final_seeds"]) + 1)
-    element_out = Path("runs") / "element" / target.name
-    print(f"calibrate {target.name}: the chosen grains' element test at {target.normal_stress / 1e3:g} kPa, "
-          f"{len(seeds)} seeds", file=stream, flush=True)
-    final, *held_out = run_element(card, [target.normal_stress, *(v["normal_stress"] for v in target.verification)],
-                                   seeds, output=element_out, executor=executor, jobs=jobs, stream=stream)
-    achieved = [{"quantity": c["quantity"], "target": c["laboratory"], "value": c["measured"], "lo": c["lo"],
-                 "hi": c["hi"], "difference": c["difference"], "verdict": c["verdict"]}
-                for c in compare(target.values, final)]
-    verification = []
-    for v, r in zip(target.verification, held_out):
-        verification.append({**v, "measured": {k: val for k, val in r.to_dict().items()
-                                               if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")},
-                             "checks": compare(v, r)})
-    n_runs += len(seeds) * (1 + len(target.verification))
+    final, achieved, verification, n_final = _final_checks(card, target, int(budget["final_seeds"]), executor, jobs,
+                                                           stream)
+    n_runs += n_final
     result = {
         "card": str(card_path), "target": target.name, "chosen": chosen, "posterior": posterior,
         "achieved": achieved, "verification": verification,

@@ -19,6 +19,8 @@ module adds what is legal but physically implausible for a quasi-2D shear test o
 
 from __future__ import annotations
 
+from interphase.analysis.quasistatic import inertial_estimate, quasi_static_speed, rate_warnings
+from interphase.case import case_from_dict
 from interphase.errors import InputError
 
 #: field → (low, high, unit, why): outside [low, high] a value is legal but implausible (a warning)
@@ -56,8 +58,6 @@ CONVERGED = {
 
 def input_errors(cases, where: str = "case") -> None:
     """Raise an InputError for the first case whose shear is far from quasi-static (I ≥ INERTIAL_ERROR)."""
-    from interphase.campaign.plan import inertial_estimate, quasi_static_speed
-
     for c in cases:
         i = inertial_estimate(c)
         if i >= INERTIAL_ERROR:
@@ -69,9 +69,7 @@ def input_errors(cases, where: str = "case") -> None:
 
 def input_warnings(cases) -> list[str]:
     """One line per implausible (field, value) over `cases` (with how many cases it concerns), then
-    the inertial-number warnings of `plan.rate_warnings`. Empty when everything is plausible."""
-    from interphase.campaign.plan import rate_warnings
-
+    the inertial-number warnings of `analysis.quasistatic.rate_warnings`. Empty when everything is plausible."""
     seen: dict[tuple[str, object], int] = {}
     for c in cases:
         for name, (lo, hi, _, _) in PLAUSIBLE.items():
@@ -105,3 +103,24 @@ def case_file_warnings(path, case) -> list[str]:
 
     stated = tomllib.loads(Path(path).read_text()).get("case", {})
     return input_warnings([case]) + default_notes(stated)
+
+
+def load_case_file(path):
+    """The Case of a TOML file's [case] table (Case fields, SI units; a profile file's path is
+    relative to the TOML file), refused when its shear is far from quasi-static (input_errors). Every
+    problem is an InputError naming the file."""
+    import tomllib
+    from pathlib import Path
+
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except FileNotFoundError:
+        raise InputError("file not found", where=str(path), fix="give a TOML file with a [case] table") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"TOML syntax error: {exc}", where=str(path)) from None
+    if "case" not in data or not isinstance(data["case"], dict):
+        raise InputError("no [case] table", where=str(path), fix="put the Case fields under [case]")
+    case = case_from_dict(data["case"], where=f"{path}: [case]", base_dir=p.parent)
+    input_errors([case], where=f"{path}: [case]: case")
+    return case

@@ -87,7 +87,7 @@ def compare(ref: pd.DataFrame, variant: pd.DataFrame, tolerances: dict | None = 
 
 def compare_campaigns(ref_path: str | Path, variant_path: str | Path, tolerances: dict | None = None) -> pd.DataFrame:
     """Open both campaigns' finished runs and `compare` them."""
-    from interphase.report.build import open_campaign
+    from interphase.campaign.results import open_campaign
 
     frames = []
     for path in (ref_path, variant_path):

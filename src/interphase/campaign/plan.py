@@ -18,8 +18,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from interphase.analysis.strength import QUASI_STATIC_I
-from interphase.case import Case, Start, case_id
+from interphase.case import Case, Start, case_id, physical_id
 from interphase.campaign.schema import Campaign
 from interphase.errors import InputError
 
@@ -38,6 +37,7 @@ class PlannedCase:
     pair_id: str | None = None                  # case id of the paired box test (interface cases)
     index: int = 0                              # position in the plan (stable order)
     recipe_id: str = ""
+    physical_id: str = ""                       # interphase.case.physical_id: the same for every seed of the case
     params: dict = field(default_factory=dict, compare=False, hash=False)
 
     def meta(self, campaign: str = "") -> dict:
@@ -45,7 +45,7 @@ class PlannedCase:
         return {"case_id": self.case_id, "engine": self.engine, "group": self.group, "role": self.role,
                 "label": self.label, "pair_id": self.pair_id, "campaign": campaign,
                 "values": {k: _jsonable(v) for k, v in self.values}, "params": self.params,
-                "recipe_id": self.recipe_id}
+                "recipe_id": self.recipe_id, "physical_id": self.physical_id}
 
 
 def _jsonable(v):
@@ -117,9 +117,9 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
             c = campaign.cases[i]
             params = flat_params(cases[i])
             out.append(PlannedCase(
-                case_id=ids[i], engine=name, case=cases[i], group=c.group, role=c.role, label=_label(c.case),
+                case_id=ids[i], engine=name, case=cases[i], group=c.group, role=c.role, label=case_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
-                recipe_id=rid, params=params))
+                recipe_id=rid, physical_id=physical_id(cases[i]), params=params))
     return out
 
 
@@ -156,13 +156,14 @@ def iter_plan(campaign: Campaign, engines=None, identity=engine_identity):
             for b in new + ([c] if c is not None else []):
                 pair = case_id(box.case, name, rid) if b is c and box is not None else None
                 yield PlannedCase(case_id=case_id(b.case, name, rid), engine=name, case=b.case, group=b.group,
-                                  role=b.role, label=_label(b.case), values=b.values, pair_id=pair, index=index,
-                                  recipe_id=rid, params=flat_params(b.case))
+                                  role=b.role, label=case_label(b.case), values=b.values, pair_id=pair, index=index,
+                                  recipe_id=rid, physical_id=physical_id(b.case), params=flat_params(b.case))
                 index += 1
 
 
-def _label(case: Case) -> str:
-    """Case.label(), made unique within a campaign when the case carries a name (Group 4's A–G)."""
+def case_label(case: Case) -> str:
+    """A case's label in a campaign (PlannedCase.label, the runs' `label` column): Case.label(), made
+    unique within a campaign when the case carries a name (Group 4's A–G)."""
     if not case.name:
         return case.label()
     grading = "user" if case.gradation.sizes else case.gradation.name
@@ -185,47 +186,6 @@ def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
 
     steps = (CONSOLIDATION_TIME + case.shear_distance / case.shear_velocity) / time_step(case)
     return steps * estimate_grains(case) / throughput
-
-
-#: Shear-band thickness [D50] the inertial-number estimate assumes, per device, from the summaries' own
-#: I (the grains' velocity profiles; band = v/(I·√(σ/ρ))), 100 kPa, ~1040 grains, G = 50 MPa:
-#:  walled: 2.9–5.8e-3 on 45° and 72° saw-teeth at 0.05 m/s (band 2–5 D50; docs/strength.md): 3 D50
-#:    reproduces the interface values, the ones the warning must not miss;
-#:  periodic: at 0.02 m/s 2.5–6.3e-4 over 15 runs (band 5.1–13 D50, median 8.5), at 0.05 m/s median
-#:    1.15e-3 (band 7 D50) with single slip events down to 1 D50 (docs/convergence.md): 5 D50, the
-#:    thinnest band of the quasi-static runs.
-#:  periodic3d: not measured yet; taken as the periodic device's (docs/3d.md).
-BAND_ESTIMATE_D50 = {"walled": 3.0, "periodic": 5.0, "periodic3d": 5.0}
-
-
-def inertial_estimate(case: Case, band_d50: float | None = None) -> float:
-    """I ≈ γ̇·D50/√(σ/ρ) with γ̇ = v/(band_d50·D50) (default: the case's device's band), before the run [-]."""
-    band = band_d50 or BAND_ESTIMATE_D50[case.device]
-    return case.shear_velocity / (band * math.sqrt(case.normal_stress / case.density))
-
-
-def quasi_static_speed(case: Case, band_d50: float | None = None, limit: float = QUASI_STATIC_I) -> float:
-    """The shear speed [m/s] at which the estimate reaches `limit`."""
-    band = band_d50 or BAND_ESTIMATE_D50[case.device]
-    return limit * band * math.sqrt(case.normal_stress / case.density)
-
-
-def rate_warnings(cases) -> list[str]:
-    """One line per distinct (speed, stress, density) whose estimated I ≥ 1e-3, naming the speed
-    that would make it quasi-static and how many cases it concerns."""
-    groups: dict[tuple, list] = {}
-    for c in cases:
-        groups.setdefault((c.shear_velocity, c.normal_stress, c.density, c.device), []).append(c)
-    out = []
-    for (v, sigma, rho, dev), cs in sorted(groups.items()):
-        i = inertial_estimate(cs[0])
-        if i >= QUASI_STATIC_I:
-            fix = quasi_static_speed(cs[0])
-            out.append(f"{len(cs)} case(s) at shear_velocity = {v:g} m/s, σ = {sigma:g} Pa: estimated inertial "
-                       f"number I ≈ {i:.1e} ≥ {QUASI_STATIC_I:g} (not quasi-static; band "
-                       f"{BAND_ESTIMATE_D50[dev]:g} D50 assumed in the {dev} device); shear_velocity ≤ {fix:.3g} m/s "
-                       "would make it quasi-static")
-    return out
 
 
 #: SLURM time limits are rounded up to one of these (minutes), so that a campaign makes few arrays

@@ -14,7 +14,7 @@ A restored folder holds case.json (the plan's inputs and metadata; provenance fr
 build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields), DONE, and,
 when the report's `curves.parquet` lies beside the table, series.parquet with the run's stress-ratio
 curve (shear_disp, stress_ratio): the seed ensembles' tan δ, tan φ and E are made from those curves
-(report.ensembles). With a curves table, a row whose curve it lacks is not restored but run again
+(analysis.ensemble_table). With a curves table, a row whose curve it lacks is not restored but run again
 (it could not join its ensemble); without one, rows are restored without curves. It has no dumps:
 force networks and animations are not available for it.
 """
@@ -30,15 +30,14 @@ from pathlib import Path
 import pandas as pd
 
 from interphase.campaign import store as st
+from interphase.campaign.results import BOOKKEEPING, RUN_COLUMNS
 from interphase.errors import InputError
 
 def _not_summary() -> set[str]:
     """Columns of the summaries table that are not the run's summary: the report's run columns and
-    bookkeeping (report.build, which writes the table), its derived per-run ratio (`efficiency_run`;
+    bookkeeping (campaign.results, which writes the table), its derived per-run ratio (`efficiency_run`;
     `efficiency` in tables written before it was renamed) and the index's own columns (the Case
     parameters are dropped by name per case)."""
-    from interphase.report.build import BOOKKEEPING, RUN_COLUMNS
-
     return {*RUN_COLUMNS, *BOOKKEEPING, *st._COLUMNS, "efficiency_run", "efficiency"}
 
 
@@ -78,7 +77,7 @@ def read_record(path: str | Path) -> pd.DataFrame:
     return df
 
 
-#: the report's curves table, looked for beside the summaries table (report.build.write_curves)
+#: the report's curves table, looked for beside the summaries table (campaign.results.write_curves)
 CURVES = "curves.parquet"
 
 

@@ -194,6 +194,8 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
     report = RunReport(campaign.name, campaign.output, planned=len(planned))
     builds = engine_builds(p.engine for p in planned)
     if dry_run:
+        if campaign.seeds is not None:      # the next round: what the finished runs ask for now
+            planned = _next_round(campaign, planned, stream)
         return _dry_run(campaign, planned, executor, stream, report, rerun_failed, rerun_stale, builds, restore,
                         render=render, list_all=list_all)
 
@@ -204,114 +206,168 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
 
             print(f"campaign {campaign.name}: {describe(restore_runs(planned, store, restore, campaign.name))}",
                   file=stream, flush=True)
-        store.register(planned)
-        store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
-        stale = find_stale(planned, store.status(), builds)
-        todo, done, failed, kept_stale = _select(planned, store, rerun_failed, stale, rerun_stale)
-        report.skipped_done, report.skipped_failed = len(done), len(failed)
-        for p in done:
-            report.statuses[p.case_id] = "done"
-        indexed = store.statuses()
-        for p in failed:
-            report.statuses[p.case_id] = _state(store, indexed, p.case_id)
-        for p in kept_stale:    # an earlier recipe's result is not this recipe's; another build's is
-            report.statuses[p.case_id] = "stale" if stale[p.case_id].kind == "recipe" else "done"
-        corrupt = sum(1 for p in failed if report.statuses[p.case_id] == "corrupt")
-        print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
-              f"{len(failed)} failed (kept; --rerun-failed reruns them), "
-              + (f"{len(kept_stale)} stale (kept; --rerun-stale reruns them), " if kept_stale else "")
-              + f"{len(todo)} to run [{executor}] → {campaign.output}", file=stream, flush=True)
-        if corrupt:
-            print(f"campaign {campaign.name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
-                  "status`); --rerun-failed reruns them", file=stream, flush=True)
-        kinds = sorted({stale[p.case_id].kind for p in kept_stale})
-        if kinds:
-            print(f"campaign {campaign.name}: stale = finished under another {' or '.join(kinds)} "
-                  "(`campaign status` lists them)", file=stream, flush=True)
-        for p in todo:
-            if p.case_id in stale and stale[p.case_id].kind == "engine build":
-                dest = _supersede(store, p.case_id)
-                print(f"rerun stale {p.case_id} ({p.label}): {stale[p.case_id].message.split(':')[0]}; "
-                      f"old folder → {dest}", file=stream, flush=True)
-        for p in todo:
-            if indexed.get(p.case_id) == "corrupt" and _state(store, indexed, p.case_id) == "corrupt":
-                row = store.row(p.case_id) or {}
-                print(f"rerun corrupt {p.case_id} ({p.label}): {row.get('message')}", file=stream, flush=True)
-                st.discard_corrupt(store.case_folder(p.case_id), row.get("cause"), row.get("message"))
-        if not todo:
-            return report
-        tasks = [Task(p.case, p.engine, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
-        for p in todo:
-            store.set_status(p.case_id, "queued")
-        slots = _slots(campaign, executor, jobs)
-        if executor == "local":
-            ex = LocalExecutor(slots)
-        else:
-            ex = SlurmExecutor(campaign.output, partition=campaign.execution.partition, max_concurrent=slots,
-                               job_name=f"interphase-{campaign.name}",
-                               time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
-                                                                          campaign.execution.time_limit))
-        progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name)
+        rounds, last = 0, None
+        while True:
+            now = planned
+            if campaign.seeds is not None:
+                from interphase.campaign.sequential import select
 
-        index_trouble: list[str] = []
-
-        def on_event(kind: str, cid: str, info: dict) -> None:
-            try:
-                if kind == "started":
-                    store.set_status(cid, "running", slurm_job=info.get("slurm_job"), started=time.time())
-                elif kind == "finished":
-                    row = store.record_result(cid)
-                    report.statuses[cid] = row.get("status", info.get("status"))
-            except sqlite3.OperationalError as exc:   # e.g. the disk is full: the folders stay the truth
-                if not index_trouble:
-                    print(f"campaign {campaign.name}: the index could not be written ({exc}); the case folders are "
-                          "the record, the next command re-reads them", file=stream, flush=True)
-                index_trouble.append(cid)
-                report.statuses[cid] = info.get("status")
-            if kind == "finished" and info.get("status") != "pending":
-                report.ran += 1
-            progress.event(kind, cid, info)
-            if kind == "finished" and info.get("cause") == "disk_full":
-                # every case after this one would fill the same disk: stop, keep what is finished
-                raise DiskFull(f"the disk is full (case {cid})")
-
-        # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C; and SIGINT always interrupts: a
-        # campaign started in the background of a script inherits SIGINT ignored, while its workers
-        # do act on it (executors._local_task), which would stop their cases and run on with the rest
-        old = signal.signal(signal.SIGTERM, _sigterm)
-        old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
-        try:
-            with progress:
-                for stage in _stages(tasks, campaign.specimen_from):
-                    waiting = {t.case_id: s for t in stage if (s := _start_status(t.case)) != "done"}
-                    for t in stage:
-                        if t.case_id in waiting:      # its specimen was not made: it stays pending
-                            store.set_status(t.case_id, "pending")
-                            print(f"wait {t.case_id} ({t.meta.get('label')}): the {t.case.start.engine} run it starts "
-                                  f"from, {t.case.start.case_id}, is {waiting[t.case_id]}; run the same command "
-                                  "again once it has finished", file=stream, flush=True)
-                    ready = [t for t in stage if t.case_id not in waiting]
-                    if ready:
-                        ex.run(ready, on_event)
-        except DiskFull as exc:
-            report.interrupted, report.stopped = True, exc.reason
-            print(f"campaign {campaign.name}: stopped: {exc.reason}. Running cases were stopped and recorded, "
-                  "finished ones are kept. Free some space and run the same command again.", file=stream, flush=True)
-        except (KeyboardInterrupt, Interrupted):
-            report.interrupted = True
-            print(f"campaign {campaign.name}: interrupted; running cases were stopped and recorded, "
-                  "finished ones are kept. Run the same command again to go on.", file=stream, flush=True)
-        finally:
-            signal.signal(signal.SIGTERM, old)
-            signal.signal(signal.SIGINT, old_int)
-            try:
-                store.reconcile([p.case_id for p in todo], stale_running=True)
-            except sqlite3.OperationalError as exc:
-                print(f"campaign {campaign.name}: the index could not be brought up to date ({exc}); the next "
-                      "command re-reads the folders", file=stream, flush=True)
-        for p in todo:
-            report.statuses.setdefault(p.case_id, st.folder_status(store.case_folder(p.case_id)))
+                now, state = select(campaign, planned, store)
+                rounds += 1
+                _say_round(campaign, state, rounds, stream)
+            report.planned = len(now)
+            todo = _run_round(campaign, now, store, report, executor, jobs, stream, live, builds,
+                              rerun_failed=rerun_failed and rounds <= 1, rerun_stale=rerun_stale and rounds <= 1)
+            ids = {p.case_id for p in todo}
+            if campaign.seeds is None or not todo or report.interrupted or ids == last:
+                break       # no round left, or one that would only repeat the last (runs waiting)
+            last = ids
     return report
+
+
+def _run_round(campaign: Campaign, planned: list[PlannedCase], store: st.CampaignStore, report: RunReport,
+               executor: str, jobs, stream, live, builds: dict, *, rerun_failed: bool, rerun_stale: bool) -> list:
+    """Run what of `planned` is not finished (the campaign's lock held); returns the runs it started
+    (empty: nothing was left to run). Statuses and counts go into `report`."""
+    store.register(planned)
+    store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
+    stale = find_stale(planned, store.status(), builds)
+    todo, done, failed, kept_stale = _select(planned, store, rerun_failed, stale, rerun_stale)
+    report.skipped_done, report.skipped_failed = len(done), len(failed)
+    for p in done:
+        report.statuses[p.case_id] = "done"
+    indexed = store.statuses()
+    for p in failed:
+        report.statuses[p.case_id] = _state(store, indexed, p.case_id)
+    for p in kept_stale:    # an earlier recipe's result is not this recipe's; another build's is
+        report.statuses[p.case_id] = "stale" if stale[p.case_id].kind == "recipe" else "done"
+    corrupt = sum(1 for p in failed if report.statuses[p.case_id] == "corrupt")
+    print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
+          f"{len(failed)} failed (kept; --rerun-failed reruns them), "
+          + (f"{len(kept_stale)} stale (kept; --rerun-stale reruns them), " if kept_stale else "")
+          + f"{len(todo)} to run [{executor}] → {campaign.output}", file=stream, flush=True)
+    if corrupt:
+        print(f"campaign {campaign.name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
+              "status`); --rerun-failed reruns them", file=stream, flush=True)
+    kinds = sorted({stale[p.case_id].kind for p in kept_stale})
+    if kinds:
+        print(f"campaign {campaign.name}: stale = finished under another {' or '.join(kinds)} "
+              "(`campaign status` lists them)", file=stream, flush=True)
+    for p in todo:
+        if p.case_id in stale and stale[p.case_id].kind == "engine build":
+            dest = _supersede(store, p.case_id)
+            print(f"rerun stale {p.case_id} ({p.label}): {stale[p.case_id].message.split(':')[0]}; "
+                  f"old folder → {dest}", file=stream, flush=True)
+    for p in todo:
+        if indexed.get(p.case_id) == "corrupt" and _state(store, indexed, p.case_id) == "corrupt":
+            row = store.row(p.case_id) or {}
+            print(f"rerun corrupt {p.case_id} ({p.label}): {row.get('message')}", file=stream, flush=True)
+            st.discard_corrupt(store.case_folder(p.case_id), row.get("cause"), row.get("message"))
+    if todo:
+        _execute(campaign, todo, store, report, executor, jobs, stream, live)
+    return todo
+
+
+def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStore, report: RunReport,
+             executor: str, jobs, stream, live) -> None:
+    """Run `todo` on the executor, recording every start and finish in the index and `report`;
+    Ctrl-C, SIGTERM and a full disk stop it cleanly (report.interrupted)."""
+    tasks = [Task(p.case, p.engine, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
+    for p in todo:
+        store.set_status(p.case_id, "queued")
+    slots = _slots(campaign, executor, jobs)
+    if executor == "local":
+        ex = LocalExecutor(slots)
+    else:
+        ex = SlurmExecutor(campaign.output, partition=campaign.execution.partition, max_concurrent=slots,
+                           job_name=f"interphase-{campaign.name}",
+                           time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
+                                                                      campaign.execution.time_limit))
+    progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name)
+
+    index_trouble: list[str] = []
+
+    def on_event(kind: str, cid: str, info: dict) -> None:
+        try:
+            if kind == "started":
+                store.set_status(cid, "running", slurm_job=info.get("slurm_job"), started=time.time())
+            elif kind == "finished":
+                row = store.record_result(cid)
+                report.statuses[cid] = row.get("status", info.get("status"))
+        except sqlite3.OperationalError as exc:   # e.g. the disk is full: the folders stay the truth
+            if not index_trouble:
+                print(f"campaign {campaign.name}: the index could not be written ({exc}); the case folders are "
+                      "the record, the next command re-reads them", file=stream, flush=True)
+            index_trouble.append(cid)
+            report.statuses[cid] = info.get("status")
+        if kind == "finished" and info.get("status") != "pending":
+            report.ran += 1
+        progress.event(kind, cid, info)
+        if kind == "finished" and info.get("cause") == "disk_full":
+            # every case after this one would fill the same disk: stop, keep what is finished
+            raise DiskFull(f"the disk is full (case {cid})")
+
+    # SIGTERM (kill, a batch system) stops as cleanly as Ctrl-C; and SIGINT always interrupts: a
+    # campaign started in the background of a script inherits SIGINT ignored, while its workers
+    # do act on it (executors._local_task), which would stop their cases and run on with the rest
+    old = signal.signal(signal.SIGTERM, _sigterm)
+    old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with progress:
+            for stage in _stages(tasks, campaign.specimen_from):
+                waiting = {t.case_id: s for t in stage if (s := _start_status(t.case)) != "done"}
+                for t in stage:
+                    if t.case_id in waiting:      # its specimen was not made: it stays pending
+                        store.set_status(t.case_id, "pending")
+                        print(f"wait {t.case_id} ({t.meta.get('label')}): the {t.case.start.engine} run it starts "
+                              f"from, {t.case.start.case_id}, is {waiting[t.case_id]}; run the same command "
+                              "again once it has finished", file=stream, flush=True)
+                ready = [t for t in stage if t.case_id not in waiting]
+                if ready:
+                    ex.run(ready, on_event)
+    except DiskFull as exc:
+        report.interrupted, report.stopped = True, exc.reason
+        print(f"campaign {campaign.name}: stopped: {exc.reason}. Running cases were stopped and recorded, "
+              "finished ones are kept. Free some space and run the same command again.", file=stream, flush=True)
+    except (KeyboardInterrupt, Interrupted):
+        report.interrupted = True
+        print(f"campaign {campaign.name}: interrupted; running cases were stopped and recorded, "
+              "finished ones are kept. Run the same command again to go on.", file=stream, flush=True)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+        signal.signal(signal.SIGINT, old_int)
+        try:
+            store.reconcile([p.case_id for p in todo], stale_running=True)
+        except sqlite3.OperationalError as exc:
+            print(f"campaign {campaign.name}: the index could not be brought up to date ({exc}); the next "
+                  "command re-reads the folders", file=stream, flush=True)
+    for p in todo:
+        report.statuses.setdefault(p.case_id, st.folder_status(store.case_folder(p.case_id)))
+
+
+def _next_round(campaign: Campaign, planned: list[PlannedCase], stream) -> list[PlannedCase]:
+    """The runs sequential seeds ask for now (campaign.sequential.select), read without the lock."""
+    from interphase.campaign.sequential import rounds_of, wanted_ids
+
+    if campaign.output.is_dir():
+        with st.CampaignStore(campaign.output) as store:
+            rounds = rounds_of(campaign, planned, store)
+    else:
+        rounds = rounds_of(campaign, planned, None)
+    _say_round(campaign, rounds, 0, stream)
+    want = wanted_ids(campaign.seeds, planned, rounds)
+    return [p for p in planned if p.case_id in want]
+
+
+def _say_round(campaign: Campaign, state: dict, n: int, stream) -> None:
+    """One line per round of sequential seeds: cases still adding seeds, reached, capped."""
+    counts: dict[str, int] = {}
+    for r in state.values():
+        counts[r.state] = counts.get(r.state, 0) + 1
+    rule = campaign.seeds
+    print(f"campaign {campaign.name}: seeds " + (f"round {n}" if n else "now") + f" (target ± {rule.halfwidth:g} in {rule.quantity}, "
+          f"{rule.start}–{rule.max} seeds): " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
+          + " physical case(s)", file=stream, flush=True)
 
 
 def _stages(tasks: list[Task], specimen_from: str | None) -> list[list[Task]]:
@@ -414,17 +470,41 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
 
 def campaign_status(path, *, output=None, engine: str | None = None):
     """(Campaign, planned cases, status DataFrame of the planned cases; pending where never run).
-    A stale case (find_stale) shows status 'stale', cause the kind, message the reason and fix."""
-    import pandas as pd
-
+    A stale case (find_stale) shows status 'stale', cause the kind, message the reason and fix.
+    With [seeds] (sequential seeds) the planned cases are the runs the rounds asked for so far, and
+    `df.attrs["seeds"]` is one row per physical case (campaign.sequential.rounds_frame); else None."""
     campaign = load_campaign(path, output=output)
     planned = plan(campaign, [engine] if engine else None)
+    seeds = None
+    if campaign.seeds is not None:     # sequential seeds: the runs asked for so far, and each case's interval
+        from interphase.campaign.sequential import rounds_frame, rounds_of, wanted_ids
+
+        with (st.CampaignStore(campaign.output) if campaign.output.is_dir() else _nothing()) as store:
+            rounds = rounds_of(campaign, planned, store)
+        want = wanted_ids(campaign.seeds, planned, rounds)
+        planned = [p for p in planned if p.case_id in want]
+        seeds = rounds_frame(campaign.seeds, rounds)
+    df = _status_frame(campaign, planned)
+    df.attrs["seeds"] = seeds
+    return campaign, planned, df
+
+
+def _nothing():
+    import contextlib
+
+    return contextlib.nullcontext()
+
+
+def _status_frame(campaign: Campaign, planned: list[PlannedCase]):
+    """The status DataFrame of `planned`: see campaign_status."""
+    import pandas as pd
+
     cols = ["case_id", "engine", "group", "label", "role", "status", "cause", "message", "elapsed", "attempts",
             "slurm_job"]
     if not campaign.output.is_dir():
         df = pd.DataFrame([{"case_id": p.case_id, "engine": p.engine, "group": p.group, "label": p.label,
                             "role": p.role, "status": "pending"} for p in planned], columns=cols)
-        return campaign, planned, df
+        return df
     with st.CampaignStore(campaign.output) as store:
         store.register(planned)
         every = store.status()
@@ -434,4 +514,4 @@ def campaign_status(path, *, output=None, engine: str | None = None):
     for i, cid in enumerate(ids):
         if cid in stale:
             df.loc[i, ["status", "cause", "message"]] = ["stale", stale[cid].kind, stale[cid].message]
-    return campaign, planned, df[[c for c in cols + ["recipe_id", "engine_version"] if c in df.columns]]
+    return df[[c for c in cols + ["recipe_id", "engine_version"] if c in df.columns]]

@@ -22,9 +22,9 @@ import time
 import traceback
 from pathlib import Path
 
-from interphase import __version__
 from interphase.campaign import store as st
 from interphase.case import Case
+from interphase.version import __version__
 
 
 class Interrupted(BaseException):
@@ -119,6 +119,45 @@ def _failure(folder: Path, status: str, cause: str, message: str, started: float
     return data
 
 
+def _start_record(case: Case, engine_name: str, engine, meta: dict, cid: str, started: float) -> dict:
+    """case.json at the start of a run: the case, its engine and recipe, and where it runs."""
+    return {**meta, "case_id": cid, "engine": engine_name, "inputs": case.canonical(), "name": case.name,
+            "provenance": {"package": "interphase-dem", "package_version": __version__,
+                           "engine_version": engine.version(), "recipe_id": engine.recipe_id(),
+                           "host": socket.gethostname(), "pid": os.getpid(), "python": sys.version.split()[0],
+                           "platform": platform.platform(), "slurm_job": _slurm_job()},
+            "host": socket.gethostname(), "slurm_job": _slurm_job(), "started": started, "finished": None}
+
+
+def _record_exception(folder: Path, exc: Exception, stage: str, started: float) -> dict:
+    """Record a run that raised during `stage` (its cause, message, log tail); returns the failure
+    record. A SLURM time limit is recorded and raised again."""
+    from interphase.engines.base import EngineError
+
+    if type(exc).__name__ == "UncompletedJobError":
+        # submitit's answer to SLURM's time-limit signal: the job is out of time
+        _failure(folder, "killed", "slurm_timeout", f"SLURM time limit reached during {stage}: {exc}", started)
+        raise
+    if disk_full(exc, folder):
+        data = _record_disk_full(folder, stage, exc, started)
+    elif isinstance(exc, EngineError):
+        d = exc.to_dict()
+        data = _failure(folder, "failed", d["cause"], d["message"], started, d.get("log_tail") or "",
+                        returncode=d.get("returncode"), command=d.get("command"), stage=stage)
+    else:
+        cause = {"write_input": "input_error", "read_results": "read_error",
+                 "summarise": "analysis_error"}.get(stage, "runner_error")
+        tb = traceback.format_exc(limit=8)
+        try:
+            data = _failure(folder, "failed", cause, f"{type(exc).__name__} during {stage}: {exc}", started,
+                            st_tail(folder), traceback=tb, stage=stage)
+        except OSError as rec:
+            if not disk_full(rec, folder):
+                raise
+            data = _record_disk_full(folder, stage, exc, started)
+    return data
+
+
 def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict | None = None, *,
              engine=None) -> dict:
     """Run one case in `folder`; returns {case_id, status, cause, message, elapsed, skipped, ...}.
@@ -143,12 +182,7 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
         if engine is None:
             from interphase.engines.base import get_engine
             engine = get_engine(engine_name)
-        record = {**meta, "case_id": cid, "engine": engine_name, "inputs": case.canonical(), "name": case.name,
-                  "provenance": {"package": "interphase-dem", "package_version": __version__,
-                                 "engine_version": engine.version(), "recipe_id": engine.recipe_id(),
-                                 "host": socket.gethostname(), "pid": os.getpid(), "python": sys.version.split()[0],
-                                 "platform": platform.platform(), "slurm_job": _slurm_job()},
-                  "host": socket.gethostname(), "slurm_job": _slurm_job(), "started": started, "finished": None}
+        record = _start_record(case, engine_name, engine, meta, cid, started)
         st.write_json_atomic(folder / st.CASE_JSON, record)
         st.append_attempt(folder, {"event": "start", "time": started, "host": socket.gethostname(),
                                    "pid": os.getpid(), "slurm_job": _slurm_job()})
@@ -186,29 +220,7 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
         _failure(folder, "interrupted", "interrupted", f"stopped during {stage}: {reason}", started)
         raise
     except Exception as exc:  # noqa: BLE001 — every failure is recorded, the campaign goes on
-        from interphase.engines.base import EngineError
-
-        if type(exc).__name__ == "UncompletedJobError":
-            # submitit's answer to SLURM's time-limit signal: the job is out of time
-            _failure(folder, "killed", "slurm_timeout", f"SLURM time limit reached during {stage}: {exc}", started)
-            raise
-        if disk_full(exc, folder):
-            data = _record_disk_full(folder, stage, exc, started)
-        elif isinstance(exc, EngineError):
-            d = exc.to_dict()
-            data = _failure(folder, "failed", d["cause"], d["message"], started, d.get("log_tail") or "",
-                            returncode=d.get("returncode"), command=d.get("command"), stage=stage)
-        else:
-            cause = {"write_input": "input_error", "read_results": "read_error",
-                     "summarise": "analysis_error"}.get(stage, "runner_error")
-            tb = traceback.format_exc(limit=8)
-            try:
-                data = _failure(folder, "failed", cause, f"{type(exc).__name__} during {stage}: {exc}", started,
-                                st_tail(folder), traceback=tb, stage=stage)
-            except OSError as rec:
-                if not disk_full(rec, folder):
-                    raise
-                data = _record_disk_full(folder, stage, exc, started)
+        data = _record_exception(folder, exc, stage, started)
         return {"case_id": cid, "status": data["status"], "skipped": False, "cause": data["cause"],
                 "message": data["message"], "elapsed": data["elapsed"]}
 

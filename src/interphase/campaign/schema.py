@@ -47,6 +47,13 @@ File layout (SI units; [case] keys are the field names of `interphase.case.Case`
     seeds = [1, 2, 3, 4, 5, 6]         # each soil's box test also on these packing seeds: tan φ, shared
                                        # by every interface case on that soil, rests on more seeds
 
+    [seeds]                            # sequential seeds (campaign.sequential), instead of a seed sweep:
+    start = 3                          # every physical case runs seeds 1..start first
+    max = 12                           # the cap: never more seeds than this per physical case
+    step = 1                           # seeds added per round to a case still wider than the target
+    target = {quantity = "E", halfwidth = 0.05}   # E | tan_delta | E_cs | tan_delta_cs; halfwidth [-],
+                                       # absolute, half the width of the quantity's 95 % interval
+
 Every message names the file, the line of the key, the key, the allowed values and the fix.
 """
 
@@ -67,12 +74,16 @@ from interphase.errors import InputError
 
 ENGINES = ("liggghts", "yade")
 EXECUTORS = ("local", "slurm")
-TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs",
+TOP_KEYS = ("campaign", "execution", "case", "sweep", "zip", "group", "pairs", "seeds",
             "crosscheck")   # [crosscheck] tolerances: read by campaign.crosscheck, ignored here
 CAMPAIGN_KEYS = ("name", "description", "engines", "engine", "output", "specimen_from")
 EXECUTION_KEYS = ("executor", "jobs", "partition", "time_limit", "time_factor", "max_concurrent")
 GROUP_KEYS = ("name", "description", "case", "sweep", "zip")
 PAIR_KEYS = ("box", "case", "seeds")
+SEEDS_KEYS = ("start", "max", "step", "target")
+TARGET_KEYS = ("quantity", "halfwidth")
+#: quantities a [seeds] target may name: columns of the report's ensembles table (analysis.ensemble_table)
+SEED_QUANTITIES = ("E", "tan_delta", "E_cs", "tan_delta_cs")
 CASE_FIELDS = tuple(f for f in Case.__dataclass_fields__ if f not in PLANNED_FIELDS)
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
@@ -87,6 +98,20 @@ class Execution:
     time_limit: float | None = None     # minutes per case; None: from the case size
     time_factor: float = 3.0
     max_concurrent: int = 16
+
+
+@dataclass(frozen=True)
+class SeedRule:
+    """[seeds]: sequential seeds (campaign.sequential). Every physical case runs seeds 1..start; after
+    each round a case whose 95 % interval of `quantity` is wider than ± `halfwidth` [-] (absolute,
+    half of hi − lo) gets `step` more seeds, up to `max` seeds."""
+
+    start: int
+    max: int
+    step: int
+    quantity: str
+    halfwidth: float
+    pair_seeds: tuple[int, ...] = ()    # [pairs] seeds: the soils' further seeds, always run
 
 
 @dataclass(frozen=True)
@@ -118,6 +143,7 @@ class Campaign:
     execution: Execution = field(default_factory=Execution)
     description: str = ""
     specimen_from: str | None = None    # the engine whose consolidated specimens the others shear
+    seeds: SeedRule | None = None       # [seeds]: sequential seeds (campaign.sequential); None: as swept
     stated: tuple[str, ...] = ()        # Case fields the file states ([case], groups, sweeps, zips)
     output_from: str = ""               # where `output` came from, said with it (the runs folder)
     size: int = 0                       # cases of the sweeps' products (before box tests), counted
@@ -247,7 +273,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
         raise InputError(f"TOML syntax error: {exc}", where=where,
                          fix="see https://toml.io (strings need quotes, tables [name], lists [a, b])") from None
     _check_keys(ctx, data, TOP_KEYS, ())
-    for key in ("campaign", "execution", "case", "sweep", "zip", "pairs"):
+    for key in ("campaign", "execution", "case", "sweep", "zip", "pairs", "seeds"):
         if key in data and not isinstance(data[key], (dict, list) if key == "zip" else dict):
             raise ctx.error((key,), f"must be a table [{key}], got {_type_name(data[key])}")
 
@@ -295,6 +321,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
 
     _check_case_keys(ctx, top_case, ("case",))
+    seed_rule, groups_spec = _with_seed_rule(ctx, data, groups_raw, groups_spec)
     groups: list[Group] = []
     gens: list[tuple] = []
     for gname, gdesc, gcase, sweep, zips, gpath in groups_spec:
@@ -323,8 +350,76 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines,
                     groups=tuple(groups), cases=cases, size=size, lazy=lazy,
                     output=Path(os.path.abspath(out)), output_from=output_from, execution=execution,
-                    description=description, specimen_from=specimen_from,
+                    description=description, specimen_from=specimen_from, seeds=seed_rule,
                     _spec=_Spec(ctx, tuple(gens), base_dir, pairs, tuple(c.case for c in checked)))
+
+
+def _seed_rule(ctx: _Ctx, table: dict, pairs: dict) -> SeedRule:
+    """[seeds] → SeedRule, every key checked (file, line and field in every message)."""
+    p = ("seeds",)
+    _check_keys(ctx, table, SEEDS_KEYS, p)
+    for key in ("start", "max", "target"):
+        if key not in table:
+            raise ctx.error(p, f"[seeds] needs {key}", "e.g. start = 3, max = 12, step = 1, "
+                            'target = {quantity = "E", halfwidth = 0.05}')
+    n = {}
+    from interphase.analysis.ensemble import MIN_SEEDS
+
+    for key, low in (("start", MIN_SEEDS), ("max", MIN_SEEDS), ("step", 1)):
+        v = table.get(key, 1)
+        if isinstance(v, bool) or not isinstance(v, int) or v < low:
+            raise ctx.error(p + (key,), f"must be an integer ≥ {low}, got {v!r}",
+                            f"no interval is computed below {MIN_SEEDS} seeds (docs/methods.md)" if low > 1 else None)
+        n[key] = v
+    if n["start"] > n["max"]:
+        raise ctx.error(p + ("start",), f"start = {n['start']} is more than max = {n['max']}",
+                        "start is the seeds every case runs first, max the cap: start ≤ max")
+    target = table["target"]
+    if not isinstance(target, dict):
+        raise ctx.error(p + ("target",), f"must be a table, got {_type_name(target)}",
+                        'e.g. target = {quantity = "E", halfwidth = 0.05}')
+    _check_keys(ctx, target, TARGET_KEYS, p + ("target",))
+    q = target.get("quantity")
+    if q not in SEED_QUANTITIES:
+        raise ctx.error(p + ("target", "quantity"), f"unknown quantity {q!r}",
+                        _did_you_mean(str(q), SEED_QUANTITIES).replace("allowed keys", "allowed"))
+    h = target.get("halfwidth")
+    if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or h <= 0:
+        raise ctx.error(p + ("target", "halfwidth"), f"must be a number > 0 (half the 95 % interval's width, "
+                        f"in the quantity's own units), got {h!r}", "e.g. halfwidth = 0.05")
+    if q.startswith("E") and isinstance(pairs, dict) and pairs.get("box", True) is False:
+        raise ctx.error(p + ("target", "quantity"), f"{q} needs the paired box tests, and [pairs] box = false",
+                        'target tan_delta instead, or remove box = false')
+    extra = pairs.get("seeds", []) if isinstance(pairs, dict) else []
+    extra = tuple(x for x in extra if isinstance(x, int)) if isinstance(extra, list) else ()
+    return SeedRule(n["start"], n["max"], n["step"], q, float(h), extra)
+
+
+def _with_seed_rule(ctx: _Ctx, data: dict, groups_raw, groups_spec: list) -> tuple:
+    """(SeedRule or None, the groups with `seed = [1..max]` swept last when the file has [seeds])."""
+    if "seeds" not in data:
+        return None, groups_spec
+    rule = _seed_rule(ctx, data["seeds"], data.get("pairs", {}))
+    _no_seed_sweep(ctx, data, groups_raw)
+    values = list(range(1, rule.max + 1))
+    return rule, [(n, d, c, {**sw, "seed": values}, z, gp) for n, d, c, sw, z, gp in groups_spec]
+
+
+def _no_seed_sweep(ctx: _Ctx, data: dict, groups_raw) -> None:
+    """[seeds] replaces the seed sweep: a seed set anywhere else is an error naming both."""
+    places = [("case",), ("sweep",)] + [("zip",)] * isinstance(data.get("zip"), dict)
+    tables = [(pl, data.get(pl[0], {})) for pl in places]
+    if isinstance(data.get("zip"), list):
+        tables += [(("zip", i), z) for i, z in enumerate(data["zip"])]
+    for gi, g in enumerate(groups_raw if isinstance(groups_raw, list) else []):
+        for key in ("case", "sweep", "zip"):
+            if isinstance(g.get(key), dict):
+                tables.append((("group", gi, key), g[key]))
+    for path, table in tables:
+        if isinstance(table, dict) and "seed" in table:
+            line = ctx.loc.line(("seeds",))
+            raise ctx.error(path + ("seed",), f"the seed is set here and by [seeds] (line {line}): [seeds] "
+                            "runs seeds 1, 2, … itself", "remove one: the seed sweep, or the [seeds] table")
 
 
 #: above this many cases (the product of the sweeps, before box tests) a campaign is planned lazily:

@@ -66,7 +66,7 @@ UNVERIFIABLE = "unverifiable"
 
 _COLUMNS = ("case_id", "engine", "grp", "label", "role", "pair_id", "status", "cause", "message", "started",
             "finished", "elapsed", "attempts", "host", "slurm_job", "params", "summary", "updated", "checked",
-            "recipe_id", "engine_version")
+            "recipe_id", "engine_version", "physical_id")
 _HIDDEN = ["params", "summary", "checked"]
 
 
@@ -250,7 +250,7 @@ def folder_record(folder: Path) -> dict | None:
            "status": status, "cause": None, "message": None, "started": meta.get("started"),
            "finished": meta.get("finished"), "elapsed": meta.get("elapsed"), "host": meta.get("host"),
            "slurm_job": meta.get("slurm_job"), "params": json.dumps(meta.get("params", {}), sort_keys=True),
-           "summary": None, "updated": time.time(), "checked": None}
+           "summary": None, "updated": time.time(), "checked": None, "physical_id": meta.get("physical_id")}
     row["recipe_id"], row["engine_version"] = run_identity(meta)
     try:
         row["attempts"] = sum(1 for line in open(folder / ATTEMPTS) if '"event": "start"' in line)
@@ -331,14 +331,15 @@ class CampaignStore:
             "CREATE TABLE IF NOT EXISTS cases (case_id TEXT PRIMARY KEY, engine TEXT, grp TEXT, label TEXT, "
             "role TEXT, pair_id TEXT, status TEXT, cause TEXT, message TEXT, started REAL, finished REAL, "
             "elapsed REAL, attempts INTEGER, host TEXT, slurm_job TEXT, params TEXT, summary TEXT, updated REAL, "
-            "checked TEXT, recipe_id TEXT, engine_version TEXT)")
+            "checked TEXT, recipe_id TEXT, engine_version TEXT, physical_id TEXT)")
         have = {r[1] for r in self._db.execute("PRAGMA table_info(cases)")}
-        for col in ("checked", "recipe_id", "engine_version"):   # an index written by an older version
+        for col in ("checked", "recipe_id", "engine_version", "physical_id"):   # an index of an older version
             if col not in have:
                 with contextlib.suppress(sqlite3.OperationalError):   # another reader added it first
                     self._db.execute(f"ALTER TABLE cases ADD COLUMN {col} TEXT")
-                # its finished rows are read from their folders again by the next reconcile()
-                self._db.execute("UPDATE cases SET checked = NULL")
+                if col != "physical_id":   # (that one the plan fills in: register, results.one_run_per_case)
+                    # its finished rows are read from their folders again by the next reconcile()
+                    self._db.execute("UPDATE cases SET checked = NULL")
 
     def close(self) -> None:
         self._db.close()
@@ -412,9 +413,10 @@ class CampaignStore:
         """Add planned cases (status from their folders; pending if none). Existing rows keep their data
         unless the folder says otherwise."""
         have = {r[0]: (r[1], r[2]) for r in self._db.execute("SELECT case_id, status, summary FROM cases")}
-        rows = []
+        rows, physical = [], []
         now = time.time()
         for p in planned:
+            physical.append((p.physical_id or None, p.case_id))
             folder = self.root / p.case_id
             status = folder_status(folder) if folder.exists() else "pending"
             known = have.get(p.case_id)
@@ -428,9 +430,11 @@ class CampaignStore:
             if rec is None:
                 rec = {"case_id": p.case_id, "status": status, "attempts": 0, "updated": now}
             rec.update(engine=p.engine, grp=p.group, label=p.label, role=p.role, pair_id=p.pair_id,
-                       params=json.dumps(p.params, sort_keys=True))
+                       params=json.dumps(p.params, sort_keys=True), physical_id=p.physical_id)
             rows.append(rec)
         self._upsert(rows)
+        # rows kept as they were, of an index or folders older than the physical id: the plan's
+        self._db.executemany("UPDATE cases SET physical_id = ? WHERE case_id = ? AND physical_id IS NULL", physical)
 
     def reconcile(self, case_ids=None, stale_running: bool = False) -> int:
         """Re-read every case whose folder disagrees with its index row (e.g. after a crash, or a file
@@ -465,7 +469,7 @@ class CampaignStore:
                     self.set_status(cid, "pending")
                 else:
                     old = self.row(cid) or {}
-                    rec.update({k: old.get(k) for k in ("engine", "grp", "label", "role", "pair_id", "params")
+                    rec.update({k: old.get(k) for k in ("engine", "grp", "label", "role", "pair_id", "params", "physical_id")
                                 if old.get(k) is not None})
                     fix.append(rec)
         self._upsert(fix)
@@ -494,7 +498,7 @@ class CampaignStore:
         if rec is None:
             self.set_status(case_id, "pending")
             return self.row(case_id) or {}
-        rec.update({k: old.get(k) for k in ("engine", "grp", "label", "role", "pair_id", "params")
+        rec.update({k: old.get(k) for k in ("engine", "grp", "label", "role", "pair_id", "params", "physical_id")
                     if old.get(k) is not None})
         self._upsert([rec])
         return rec

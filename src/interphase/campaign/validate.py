@@ -45,16 +45,17 @@ def profile_spec(row, d50: float, folder: Path) -> dict:
 
 
 def simulate(table, card, seeds, *, output: Path, executor: str | None = None, jobs: int | None = None,
-             stream=None) -> pd.DataFrame:
+             stream=None, protocol: dict | None = None) -> pd.DataFrame:
     """DEM δ at the peak (seed ensemble, 95 % interval) per laboratory row: columns row,
-    delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds."""
-    from interphase.api import ensembles
+    delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds. `protocol`: the
+    interface cases' Case fields (default PROTOCOL)."""
     from interphase.campaign.element import run_cases
+    from interphase.campaign.results import campaign_ensembles
 
     output = Path(output)
     from interphase.analysis.validation import row_friction
 
-    case = {"soil": str(Path(card.path).resolve()), **PROTOCOL}
+    case = {"soil": str(Path(card.path).resolve()), **(PROTOCOL if protocol is None else protocol)}
     groups = []
     for _, r in table.rows.iterrows():
         groups.append({"name": f"row{int(r['row'])}",
@@ -66,7 +67,7 @@ def simulate(table, card, seeds, *, output: Path, executor: str | None = None, j
                           description=f"{table.path} on the soil card {card.path}")
     run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr)
     try:
-        ens = ensembles(path)
+        ens = campaign_ensembles(path)
     except InputError:
         ens = pd.DataFrame(columns=["group", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_phi", "seeds"])
     deg = lambda t: np.degrees(np.arctan(pd.to_numeric(t, errors="coerce")))

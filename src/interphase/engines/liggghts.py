@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device, time_step
@@ -28,6 +27,7 @@ from interphase.material import youngs_modulus
 from interphase.recipe import FILE as RECIPE_FILE
 from interphase.recipe import read_record
 from interphase.surface.mesh import segment_triangles, stl_text
+from interphase.version import __version__
 
 __all__ = ["Liggghts", "check_grain_balance", "classify", "time_step"]   # time_step: campaign/plan.py
 

@@ -15,8 +15,6 @@ import math
 import re
 from pathlib import Path
 
-import interphase
-from interphase import __version__
 from interphase.case import Case
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
 from interphase.engines.device import Device, device
@@ -25,6 +23,7 @@ from interphase.errors import InputError
 from interphase.material import youngs_modulus
 from interphase.recipe import FILE as RECIPE_FILE
 from interphase.recipe import RECIPE
+from interphase.version import __version__
 
 #: Ig2_Facet_Sphere_ScGeom gives the facet refR1 = 2r, so YADE's facet–sphere Hertz radius is
 #: R* = 2r/3 where LIGGGHTS' wall has R* = r. Walls get E_w = E/(2/√1.5 − 1) ≈ 1.58·E, which makes
@@ -93,7 +92,7 @@ def driver_input(dev: Device) -> dict:
         exits=[seg[0] for seg in dev.exits] if dev.exits else None,   # grains past these x are out of the box
         period=dev.record("yade").period, bed=list(dev.bed),           # periodic device (engines/yade_driver.py)
         # YADE runs the system python3: the driver script adds this to its sys.path to import the package
-        package_root=str(Path(interphase.__file__).resolve().parents[1]),
+        package_root=str(Path(__file__).resolve().parents[2]),    # src/, above the package
     )
 
 

@@ -9,10 +9,14 @@ Output folder (default: the campaign's output folder + "/report"):
             draw (Fig. 6.9 without flat-spaced surfaces) is left out and the page says why
   correlations.json   the fits (BilinearFit.to_dict rows)
   index.html          links them all
-Seeds: every figure, results table and fit is per PHYSICAL case (a case label without `-sN`): the
+Seeds: every figure, results table and fit is per PHYSICAL case (its seeds share a physical_id,
+interphase.case.physical_id; it is named by its label without `-sN`): the
 mean over its seeds with a 95 % interval (tan δ, tan φ and E those of the ensembles table), fits with
 the seed bootstrap (analysis.correlations.seed_ensemble, fit_study; docs/methods.md §7).
 Memory: only the summaries table and, per figure, one case's series or contacts at a time are read.
+Code: `analyse(summaries, …) → ReportModel` computes everything and writes nothing; `write(model, out)`
+draws and writes it. The summaries and curves tables it writes are the campaign's result format
+(campaign.results).
 """
 
 from __future__ import annotations
@@ -26,13 +30,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from interphase import __version__
 from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
 from interphase.analysis.criterion import CriterionModel, check_cases, check_summary, fitted_soil_tan_phi, skill
+from interphase.analysis.ensemble_table import ensemble_tables
+from interphase.campaign.results import open_campaign, recipe_notes, write_curves, write_summaries
 from interphase.errors import InputError
 from interphase.report import figures as F
 from interphase.report import tables as T
 from interphase.report.html import html_table
+from interphase.version import __version__
 
 MAX_CURVES = 60            # stress-ratio curves per group figure (more become unreadable)
 NETWORK_CASES = 2          # force networks: the strongest and the weakest interface case
@@ -46,7 +52,7 @@ class ReportResult:
     warnings: list[str] = field(default_factory=list)
     fits: list = field(default_factory=list)
     points: pd.DataFrame | None = None        # one row per physical case (SeedEnsemble.points): what is plotted
-    ensembles: pd.DataFrame | None = None     # one row per physical case (report.ensembles)
+    ensembles: pd.DataFrame | None = None     # one row per physical case (analysis.ensemble_table)
     runs: pd.DataFrame | None = None          # one row per run (prepare_points), for the force networks
     ensemble: SeedEnsemble | None = None
     criterion_check: pd.DataFrame | None = None   # criterion_checks: the chain against every case
@@ -59,8 +65,6 @@ def ensemble_points(summaries: pd.DataFrame, store=None, *, e_note: float = 1.2)
     runs = prepare_points(summaries)
     table, states, pools = None, None, None
     if store is not None:
-        from interphase.report.ensembles import ensemble_tables
-
         table, states, pools = ensemble_tables(summaries, store, e_note=e_note)
     return seed_ensemble(runs, states, table, box_pools=pools), table
 
@@ -226,146 +230,175 @@ def _curves(store, rows: pd.DataFrame) -> dict[str, pd.DataFrame]:
     return out
 
 
-#: first in summaries.csv: a run's identity and physical case; then every other column of the index
-#: (Case parameters, the summary's own columns by their names, elapsed [s]) but its bookkeeping
-RUN_COLUMNS = ("case_id", "label", "group", "test", "device", "profile_label", "friction_ps", "gradation", "seed",
-               "pair_id")
-BOOKKEEPING = ("status", "cause", "started", "finished", "attempts", "host", "slurm_job", "updated", "role",
-               "case", "reasons", "engine")
+#: the lab comparison table: analysis.validation.predict_rows columns → headings
+LAB_COLUMNS = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]",
+               "theta_a_deg": "θa [°]", "friction": "tan φμ [-]", "phi_deg": "φ [°]", "phi_from": "φ from",
+               "delta_measured_deg": "δ measured [°]", "delta_predicted_deg": "δ predicted [°]",
+               "delta_lo_deg": "δ lo [°]", "delta_hi_deg": "δ hi [°]", "error_predicted_deg": "error [°]",
+               "error_soil_deg": "error, δ = φ [°]", "error_rule_deg": "error, δ = min(φμ + θa, φ) [°]",
+               "source": "source", "table_or_figure": "table or figure", "note": "note"}
 
 
-def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
-    """Every finished run as one row of a small CSV (what a reproduction commits: no dumps): the
-    columns above, the rest by their own names, and `efficiency_run` = E_run, this run's peak stress
-    ratio over its paired box test's (same packing seed; NaN for box tests): one run's ratio, not the
-    physical case's E (the seed ensembles' ratio, tables `ensembles` and `results`; docs/methods.md).
-    Sorted by group and label, so a rerun diffs cleanly."""
-    df = summaries.copy()
-    peak = pd.to_numeric(df.get("peak_stress_ratio"), errors="coerce")
-    by_id = pd.Series(peak.to_numpy(), index=df["case_id"].astype(str))
-    box_peak = df["pair_id"].astype(str).map(by_id) if "pair_id" in df else pd.Series(math.nan, index=df.index)
-    df["efficiency_run"] = peak / pd.to_numeric(box_peak, errors="coerce")
-    first = [c for c in RUN_COLUMNS if c in df]
-    rest = [c for c in df.columns if c not in first and c not in BOOKKEEPING]
-    df = df[first + rest].sort_values(["group", "label"], kind="stable")
-    df.to_csv(path, index=False, float_format="%.6g")
-    return path
+@dataclass
+class ReportModel:
+    """What a report says, computed from the runs and nothing written (`analyse`); `write` draws and
+    writes it."""
 
+    summaries: pd.DataFrame
+    campaign: object = None
+    provenance: str = ""
+    ensemble: SeedEnsemble | None = None
+    ensembles: pd.DataFrame | None = None     # one row per physical case (analysis.ensemble_table)
+    fits: list = field(default_factory=list)
+    chain: CriterionModel | None = None       # the criterion fitted on the campaign
+    criterion_check: pd.DataFrame | None = None
+    lab: pd.DataFrame | None = None           # analysis.validation.predict_rows on the --lab file
+    tables: list = field(default_factory=list)   # report.tables.Table, in page order
+    warnings: list[str] = field(default_factory=list)
+    n_box: int = 0
 
-#: points per run in curves.parquet: 200 over a 6 mm shear is one per 0.03 mm, 12 per peak window
-#: (PEAK_WINDOW_D50 × D50 at D50 0.7 mm); the ensembles' tan δ, tan φ and E from them stay within 2 %
-#: of their interval's width of the full curves' (measured: tests/test_restore.py)
-CURVE_POINTS = 200
+    @property
+    def points(self) -> pd.DataFrame:
+        return self.ensemble.points
 
-
-def write_curves(summaries: pd.DataFrame, store, path: Path, points: int = CURVE_POINTS) -> Path | None:
-    """Every finished run's stress-ratio curve (series.parquet: shear_disp [m], stress_ratio [-]),
-    resampled linearly to `points` evenly spaced displacements between its first and last sample,
-    as one long Parquet table (case_id, shear_disp, stress_ratio; float32): with summaries.csv, what
-    a campaign needs to rebuild its seed ensembles on another machine (`campaign run --restore`).
-    None when no run has a curve."""
-    frames = []
-    for cid in summaries["case_id"].astype(str):
-        got = store.curve(cid) if store is not None else None
-        if got is None:
-            continue
-        x, r = (np.asarray(a, float) for a in got)
-        ok = np.isfinite(x) & np.isfinite(r)
-        if ok.sum() < 2:
-            continue
-        order = np.argsort(x[ok], kind="stable")
-        x, r = x[ok][order], r[ok][order]
-        grid = np.linspace(x[0], x[-1], points)
-        frames.append(pd.DataFrame({"case_id": cid, "shear_disp": grid.astype(np.float32),
-                                    "stress_ratio": np.interp(grid, x, r).astype(np.float32)}))
-    if not frames:
-        return None
-    df = pd.concat(frames, ignore_index=True)
-    df["case_id"] = df["case_id"].astype("category")
-    df.to_parquet(path, index=False, compression="zstd")
-    return path
+    @property
+    def runs(self) -> pd.DataFrame:
+        return self.ensemble.runs
 
 
 def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=None, store=None,
                           lab: str | Path | None = None, n_boot: int = 199, seed: int = 0,
                           title: str | None = None) -> ReportResult:
-    """Everything `campaign report` writes, from a summaries table (CampaignStore.summaries() shape).
-    `store` (for curves, networks, provenance) and `campaign` (input tables, Fig. 6.6) are optional."""
-    out = Path(out)
-    lab_df = None
+    """Everything `campaign report` writes, from a summaries table (CampaignStore.summaries() shape):
+    `write(analyse(...), out)`. `store` (for curves, networks, provenance) and `campaign` (input
+    tables, Fig. 6.6) are optional."""
+    lab_table = None
     if lab is not None:            # a bad lab file fails before anything is written
-        from interphase.report.lab import read_lab
+        from interphase.lab import read_lab
 
-        lab_df = read_lab(lab)
+        lab_table = read_lab(lab)
+    model = analyse(summaries, campaign=campaign, store=store, lab_table=lab_table, n_boot=n_boot, seed=seed)
+    return write(model, out, store=store, title=title)
+
+
+def analyse(summaries: pd.DataFrame, *, campaign=None, store=None, lab_table=None, n_boot: int = 199,
+            seed: int = 0) -> ReportModel:
+    """The report's content: seed ensembles, fits, the criterion and its checks, every table, the
+    warnings. Reads the runs' curves (and case.json for the provenance) from `store`; writes nothing."""
+    m = ReportModel(summaries, campaign, provenance(store, summaries))
+    m.ensemble, m.ensembles = ensemble_points(summaries, store, e_note=T.E_NOTE)
+    m.warnings += _cap_warnings(m.ensembles, campaign)
+    points = m.points
+    m.n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0
+    if points.empty:
+        m.warnings.append("no finished interface case: tables and figures are empty")
+    if points["tan_phi"].isna().all() if len(points) else True:
+        m.warnings.append("no paired box test finished: efficiency E (Figs 6.5, 6.10a) is undefined")
+    m.fits = fit_study(points, n_boot=n_boot, seed=seed, ensemble=m.ensemble)
+    m.chain = criterion_from_fits(m.fits, points, f"campaign {campaign.name if campaign else 'report'}")
+    m.criterion_check = criterion_checks(m.chain, points)
+    lab_warning = None
+    if lab_table is not None:
+        m.lab, lab_warning = _lab_rows(m.chain, lab_table)
+    m.tables = _tables(m)
+    if lab_warning:
+        m.warnings.append(lab_warning)
+    return m
+
+
+def _cap_warnings(ens_table: pd.DataFrame | None, campaign) -> list[str]:
+    """Sequential seeds: the ensembles table's note on the cases that stopped at the cap, not the
+    target (in place), and the warning line."""
+    if campaign is None or getattr(campaign, "seeds", None) is None or ens_table is None or ens_table.empty:
+        return []
+    from interphase.campaign.sequential import cap_notes
+
+    cap = cap_notes(ens_table, campaign.seeds)
+    ens_table["note"] = ["; ".join(x for x in (a, b) if x) for a, b in zip(ens_table["note"].fillna(""), cap)]
+    if not cap.ne("").any():
+        return []
+    return [f"{int(cap.ne('').sum())} physical case(s) hit the seed cap ({campaign.seeds.max}) "
+            f"before ± {campaign.seeds.halfwidth:g} in {campaign.seeds.quantity} (ensembles table)"]
+
+
+def _lab_rows(fitted: CriterionModel, lab_table) -> tuple[pd.DataFrame, str | None]:
+    """The laboratory rows predicted by the campaign's criterion, or by the study defaults (and a
+    warning saying so) when the campaign has too few points to fit it."""
+    from interphase.analysis.validation import predict_rows
+
+    usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)
+    warning = None if usable else ("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to "
+                                   "fit θa–θr and E–θr)")
+    camp_tp = fitted.tan_phi if math.isfinite(fitted.tan_phi) else CriterionModel.study_defaults(0.0).tan_phi
+    model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu, camp_tp))
+    return predict_rows(lab_table, model_for, default_phi=(math.degrees(math.atan(camp_tp)),
+                                                           "the campaign's simulated soil")), warning
+
+
+def _tables(m: ReportModel) -> list:
+    """Every table of the page, in order (and the warning on E above T.E_NOTE)."""
+    tables: list[T.Table] = []
+    if m.campaign is not None:
+        tables += T.input_tables(m.campaign)
+    tables += T.results_tables(m.points)
+    if m.ensembles is not None:
+        tables.append(T.ensembles_table(m.ensembles))
+        high = m.ensembles[pd.to_numeric(m.ensembles["E"], errors="coerce") > T.E_NOTE]
+        if len(high):
+            m.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
+                              "column of the ensembles table and docs/strength.md")
+    tables.append(T.coefficient_table(m.fits))
+    if m.criterion_check is not None:
+        shown = m.criterion_check[list(CHECK_COLUMNS)].rename(columns=CHECK_COLUMNS)
+        tables.append(T.Table("criterion_check", "The criterion θa → θr → E against every simulated case",
+                              shown, check_notes(m.criterion_check)))
+    tables += T.findings_tables(m.points)
+    if m.lab is not None:
+        tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle",
+                              m.lab[list(LAB_COLUMNS)].rename(columns=LAB_COLUMNS),
+                              ["δ = atan(E·tan φ); tan φ: the laboratory's own soil test where the file gives it, "
+                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ and "
+                               "δ = min(φμ + θa, φ) (docs/validation.md)."]))
+    return tables
+
+
+def write(m: ReportModel, out: str | Path, *, store=None, title: str | None = None) -> ReportResult:
+    """Write a ReportModel to `out`: correlations.json, criterion.json, tables/ (with the summaries
+    and curves tables of campaign.results), figures/ and index.html."""
+    out = Path(out)
     tdir, fdir = out / "tables", out / "figures"
     tdir.mkdir(parents=True, exist_ok=True)
     fdir.mkdir(parents=True, exist_ok=True)
-    res = ReportResult(out)
-    prov = provenance(store, summaries)
-    ens, ens_table = ensemble_points(summaries, store, e_note=T.E_NOTE)
-    points, runs = ens.points, ens.runs
-    res.points, res.runs, res.ensemble = points, runs, ens
-    n_box = int(((summaries.get("test", pd.Series(dtype=str)) == "box")).sum()) if len(summaries) else 0
-    if points.empty:
-        res.warnings.append("no finished interface case: tables and figures are empty")
-    if points["tan_phi"].isna().all() if len(points) else True:
-        res.warnings.append("no paired box test finished: efficiency E (Figs 6.5, 6.10a) is undefined")
-    fits = fit_study(points, n_boot=n_boot, seed=seed, ensemble=ens)
-    res.fits = fits
-    (out / "correlations.json").write_text(json.dumps([_clean(fr.row()) for fr in fits], indent=1, allow_nan=False))
+    res = ReportResult(out, warnings=list(m.warnings), fits=m.fits, points=m.points, ensembles=m.ensembles,
+                       runs=m.runs, ensemble=m.ensemble, criterion_check=m.criterion_check)
+    (out / "correlations.json").write_text(json.dumps([_clean(fr.row()) for fr in m.fits], indent=1,
+                                                      allow_nan=False))
     res.files.append(out / "correlations.json")
-
-    if len(summaries):
-        res.files.append(write_summaries(summaries, tdir / "summaries.csv"))
-        curves = write_curves(summaries, store, tdir / "curves.parquet")
+    if len(m.summaries):
+        res.files.append(write_summaries(m.summaries, tdir / "summaries.csv"))
+        curves = write_curves(m.summaries, store, tdir / "curves.parquet")
         if curves is not None:
             res.files.append(curves)
-    chain = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
-    if chain.theta_r or chain.ratio is not None or chain.efficiency is not None:
-        res.files.append(write_criterion(chain, points, out / "criterion.json", prov))
-
-    # ---- tables
-    tables: list[T.Table] = []
-    if campaign is not None:
-        tables += T.input_tables(campaign)
-    tables += T.results_tables(points)
-    if ens_table is not None:
-        res.ensembles = ens_table
-        tables.append(T.ensembles_table(ens_table))
-        high = ens_table[pd.to_numeric(ens_table["E"], errors="coerce") > T.E_NOTE]
-        if len(high):
-            res.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
-                                "column of the ensembles table and docs/strength.md")
-    tables.append(T.coefficient_table(fits))
-    checks = criterion_checks(chain, points)
-    if checks is not None:
-        res.criterion_check = checks
-        shown = checks[list(CHECK_COLUMNS)].rename(columns=CHECK_COLUMNS)
-        tables.append(T.Table("criterion_check", "The criterion θa → θr → E against every simulated case",
-                              shown, check_notes(checks)))
-    tables += T.findings_tables(points)
-    if lab_df is not None:
-        from interphase.report.lab import compare
-
-        fitted = criterion_from_fits(fits, points, f"campaign {campaign.name if campaign else 'report'}")
-        usable = bool(fitted.theta_r) and fitted.efficiency is not None and math.isfinite(fitted.tan_phi)
-        if not usable:
-            res.warnings.append("lab comparison uses the STUDY DEFAULTS (the campaign has too few points to fit "
-                                "θa–θr and E–θr)")
-        camp_tp = fitted.tan_phi if math.isfinite(fitted.tan_phi) else None   # the campaign's own box tests
-        model_for = (lambda mu: fitted) if usable else (lambda mu: CriterionModel.study_defaults(mu, camp_tp))
-        tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle", compare(lab_df, model_for),
-                              ["δ = atan(tan δ); predicted tan δ = E·tan φ."]))
+    if m.chain.theta_r or m.chain.ratio is not None or m.chain.efficiency is not None:
+        res.files.append(write_criterion(m.chain, m.points, out / "criterion.json", m.provenance))
     table_entries = []
-    for i, t in enumerate(tables):
-        paths = T.write_table(t, tdir, prov)
+    for i, t in enumerate(m.tables):
+        paths = T.write_table(t, tdir, m.provenance)
         res.files += paths
         table_entries.append({"title": t.title, "files": [p.relative_to(out).as_posix() for p in paths],
                               "inline": t.name.startswith(("table_", "correlations", "lab_", "ensembles")),
                               "html": html_table(t.df, t.notes), "anchor": f"table-{i}"})
-    res.files.append(T.write_preview(tables, tdir))
+    res.files.append(T.write_preview(m.tables, tdir))
+    figs, res.not_drawn = _figures(m, fdir, store, res)
+    for _, paths in figs:
+        res.files += paths
+    res.files.append(_page(m, out, figs, table_entries, res, title))
+    return res
 
-    # ---- figures
+
+def _figures(m: ReportModel, fdir: Path, store, res: ReportResult) -> tuple[list, list]:
+    """(figures drawn as (title, [png, pdf]), figures left out as (title, why))."""
+    points, fits, summaries = m.points, m.fits, m.summaries
     figs: list[tuple[str, list[Path]]] = []
     not_drawn: list[tuple[str, str]] = []        # (title, why): a figure with nothing to draw is left out
 
@@ -375,34 +408,30 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
         else:
             not_drawn.append((title, why or "nothing to draw"))
 
+    corr = lambda keys, name, head: F.correlation_figure(points, fits, keys, name, fdir, head)
     corr_why = lambda keys: F.empty_reason(points, keys)
+    fig3 = ["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"]
     add("Fig. 6.3: strength vs θn and θr at the surface (a, b) and in the sampling region (c, d)",
-        F.correlation_figure(points, fits, ["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"], "fig6_3", fdir,
-                             "Fig. 6.3: peak stress ratio vs principal directions θn, θr"),
-        corr_why(["fig6_3a", "fig6_3b", "fig6_3c", "fig6_3d"]))
+        corr(fig3, "fig6_3", "Fig. 6.3: peak stress ratio vs principal directions θn, θr"), corr_why(fig3))
     add("Fig. 6.5: stress ratio and E vs Rnc(D50)", F.figure_6_5(points, fdir), F.rnc_reason(points))
     d50 = float(pd.to_numeric(summaries.get("d50", pd.Series([0.7e-3])), errors="coerce").dropna().median()) \
         if len(summaries) else 0.7e-3
-    add("Fig. 6.6: polar distributions of centroid-trace normals", F.figure_6_6(_profiles_for_polar(campaign, points),
-                                                                               d50 if math.isfinite(d50) else 0.7e-3, fdir),
+    add("Fig. 6.6: polar distributions of centroid-trace normals",
+        F.figure_6_6(_profiles_for_polar(m.campaign, points), d50 if math.isfinite(d50) else 0.7e-3, fdir),
         "no surface profile (the campaign file was not given, or it has only flat surfaces)")
     add("Fig. 6.7: peak stress ratio vs θa, both filters",
-        F.correlation_figure(points, fits, ["fig6_7a", "fig6_7b"], "fig6_7", fdir, "Fig. 6.7: peak stress ratio vs θa"),
-        corr_why(["fig6_7a", "fig6_7b"]))
-    add("Fig. 6.8: θr vs θa per friction", F.correlation_figure(points, fits, ["fig6_8"], "fig6_8", fdir,
-                                                                "Fig. 6.8: θr vs θa (> 92°)"), corr_why(["fig6_8"]))
-    add("Fig. 6.9: θr/θa vs θa for flat-spaced surfaces", F.correlation_figure(points, fits, ["fig6_9"], "fig6_9", fdir,
-                                                                               "Fig. 6.9: flat-spaced surfaces"),
-        corr_why(["fig6_9"]))
-    add("Fig. 6.10a: efficiency vs θr", F.correlation_figure(points, fits, ["fig6_10a"], "fig6_10a", fdir,
-                                                             "Fig. 6.10a: failure criterion E(θr)"),
+        corr(["fig6_7a", "fig6_7b"], "fig6_7", "Fig. 6.7: peak stress ratio vs θa"), corr_why(["fig6_7a", "fig6_7b"]))
+    add("Fig. 6.8: θr vs θa per friction", corr(["fig6_8"], "fig6_8", "Fig. 6.8: θr vs θa (> 92°)"),
+        corr_why(["fig6_8"]))
+    add("Fig. 6.9: θr/θa vs θa for flat-spaced surfaces",
+        corr(["fig6_9"], "fig6_9", "Fig. 6.9: flat-spaced surfaces"), corr_why(["fig6_9"]))
+    add("Fig. 6.10a: efficiency vs θr", corr(["fig6_10a"], "fig6_10a", "Fig. 6.10a: failure criterion E(θr)"),
         corr_why(["fig6_10a"]))
-    if checks is not None:
-        add("The criterion against every simulated case: δ predicted vs measured", F.criterion_check_figure(checks, fdir))
-    if lab_df is not None:
-        tp = pd.to_numeric(points.get("tan_phi", pd.Series(dtype=float)), errors="coerce").median()
-        tp = float(tp) if math.isfinite(tp) else CriterionModel.study_defaults(0.0).tan_phi
-        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, lab_df, fdir, tp))
+    if m.criterion_check is not None:
+        add("The criterion against every simulated case: δ predicted vs measured",
+            F.criterion_check_figure(m.criterion_check, fdir))
+    if m.lab is not None:
+        add("Fig. 6.10b: laboratory data with the simulations", F.lab_figure(points, m.lab, fdir))
     if store is not None:
         allrows = summaries.copy()
         allrows["group"] = allrows.get("group", "").astype(str)
@@ -414,12 +443,12 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
                                     + (f"{len(curves)} runs" if len(curves) == len(g) else
                                        f"the first {len(curves)} of {len(g)} runs by label") + ")",
                                     f"curves_{T._safe(grp)}", fdir, curve_panels(g)))
-        add_net = _networks(store, runs, fdir, res, campaign)
-        figs += add_net
-    for _, paths in figs:
-        res.files += paths
+        figs += _networks(store, m.runs, fdir, res, m.campaign)
+    return figs, not_drawn
 
-    # ---- page
+
+def _page(m: ReportModel, out: Path, figs: list, table_entries: list, res: ReportResult, title: str | None) -> Path:
+    """index.html: the tables, the figures, what was not drawn and the warnings."""
     from markupsafe import Markup
 
     from interphase.report.html import render_page
@@ -427,14 +456,12 @@ def report_from_summaries(summaries: pd.DataFrame, out: str | Path, *, campaign=
     fig_entries = [{"title": t, "png": p[0].relative_to(out).as_posix(),
                     "pdf": p[1].relative_to(out).as_posix() if len(p) > 1 else None, "anchor": f"fig-{i}",
                     "width": _shown_width(p[0])} for i, (t, p) in enumerate(figs)]
-    res.not_drawn = not_drawn
     for e in table_entries:
         e["html"] = Markup(e["html"])
-    page = render_page(out / "index.html", title=title or f"Report: {campaign.name if campaign else 'campaign'}",
-                       provenance=prov, n_cases=len(runs), n_box=n_box, warnings=res.warnings,
-                       tables=table_entries, figures=fig_entries, not_drawn=not_drawn)
-    res.files.append(page)
-    return res
+    name = m.campaign.name if m.campaign else "campaign"
+    return render_page(out / "index.html", title=title or f"Report: {name}", provenance=m.provenance,
+                       n_cases=len(m.runs), n_box=m.n_box, warnings=res.warnings, tables=table_entries,
+                       figures=fig_entries, not_drawn=res.not_drawn)
 
 
 def _networks(store, points: pd.DataFrame, fdir: Path, res: ReportResult, campaign=None) -> list:
@@ -511,75 +538,6 @@ def _shown_width(png: Path) -> int:
 def _clean(d: dict) -> dict:
     return {k: (None if isinstance(v, float) and not math.isfinite(v) else
                 v.item() if isinstance(v, np.generic) else v) for k, v in d.items()}
-
-
-def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
-    """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
-    runs' folder when not where the file says, as `campaign run --output` wrote them)."""
-    from interphase.campaign.schema import load_campaign
-    from interphase.campaign.store import CampaignStore
-
-    campaign = load_campaign(campaign_path, output=output)
-    root = Path(campaign.output)
-    if not (root / "index.sqlite").exists() and not any(root.glob("*/DONE")):
-        raise InputError(f"no results in {root}", where=str(campaign_path),
-                         fix=f"run `campaign run {campaign_path}` first")
-    store = CampaignStore(root)
-    return campaign, store, one_run_per_case(store.summaries(), campaign)
-
-
-def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.DataFrame:
-    """The finished runs a campaign file asks for, of ONE recipe per engine: this version's recipe
-    when any of its runs has finished, else the recipe with the most finished runs (an earlier one,
-    read where it was run). Runs of other recipes and folders of labels the file no longer asks for
-    are left out, and counted: attrs `recipes` {engine: recipe id used}, `current` {engine: whether
-    it is this version's}, `other_recipe` and `not_asked` (runs left out). Mixing recipes would put
-    two protocols on one figure and count a case run again under a new recipe twice. `plan_options`
-    go to campaign.plan.plan (a test's recipe identity)."""
-    from interphase.campaign.plan import plan
-
-    attrs = dict(recipes={}, current={}, other_recipe=0, not_asked=0)
-    if summaries.empty:
-        summaries.attrs.update(attrs)
-        return summaries
-    planned = plan(campaign, **plan_options)
-    current = {p.engine: p.recipe_id for p in planned}
-    ids = {p.case_id for p in planned}
-    wanted = {(p.label, p.engine) for p in planned}
-    keys = list(zip(summaries["label"].astype(str), summaries["engine"].astype(str)))
-    asked = summaries[[k in wanted for k in keys]].copy()
-    attrs["not_asked"] = len(summaries) - len(asked)
-    rid = asked["recipe_id"] if "recipe_id" in asked else pd.Series(None, index=asked.index, dtype=object)
-    # a planned id is this recipe's whatever its folder recorded
-    asked["_recipe"] = rid.where(~asked["case_id"].astype(str).isin(ids), asked["engine"].map(current)).fillna("unknown")
-    keep = []
-    for engine, runs in asked.groupby("engine", sort=False):
-        now = current.get(engine)
-        counts = runs.groupby("_recipe")["finished"].agg(["size", "max"])
-        use = now if now in counts.index else counts.sort_values(["size", "max"]).index[-1]
-        attrs["recipes"][engine], attrs["current"][engine] = use, use == now
-        keep.append(runs[runs["_recipe"] == use])
-    out = pd.concat(keep).sort_index() if keep else asked
-    attrs["other_recipe"] = len(asked) - len(out)
-    out = out.drop(columns="_recipe")
-    out.attrs.update(attrs)
-    return out
-
-
-def recipe_notes(attrs: dict) -> list[str]:
-    """What one_run_per_case used and left out, as report lines."""
-    notes = []
-    for engine, rid in attrs.get("recipes", {}).items():
-        if not attrs["current"][engine]:
-            notes.append(f"{engine}: no finished run of this version's recipe; the report uses recipe {rid} "
-                         "(the one with most finished runs)")
-    if attrs.get("other_recipe"):
-        used = ", ".join(f"{e} {r}" for e, r in attrs["recipes"].items())
-        notes.append(f"{attrs['other_recipe']} finished run(s) of another recipe left out (used: {used}); "
-                     "`campaign status` lists the cases as stale, `campaign run --rerun-stale` reruns them")
-    if attrs.get("not_asked"):
-        notes.append(f"{attrs['not_asked']} finished folder(s) of cases the file no longer asks for left out")
-    return notes
 
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,

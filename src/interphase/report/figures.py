@@ -379,23 +379,17 @@ def _natural(text: str):
     return [float(t) if re.fullmatch(r"\d+(\.\d+)?", t) else t for t in re.split(r"(\d+(?:\.\d+)?)", text)]
 
 
-def lab_figure(points, lab: pd.DataFrame, folder: Path, tan_phi: float) -> list[Path]:
-    """Fig. 6.10b style: simulated and measured peak efficiency against θa (> 92°); a lab row with only
-    tan δ is converted with its own tan_phi, else `tan_phi` (the campaign's or the default's). Without
-    any finite tan φ the figure shows tan δ instead."""
+def lab_figure(points, lab: pd.DataFrame, folder: Path) -> list[Path]:
+    """Fig. 6.10b style: simulated and measured peak efficiency against θa (> 92°, 0 = non-dilative);
+    `lab` is analysis.validation.predict_rows' table (E measured = tan δ / tan φ of each row's φ)."""
     colour, marker = _styles(points)
-    tp = lab["tan_phi"].fillna(tan_phi)
-    lab_e = lab["efficiency"].fillna(lab["tan_delta"] / tp)
-    use_e = lab_e.notna().any() and points.get("efficiency", pd.Series(dtype=float)).notna().any()
-    y = "efficiency" if use_e else "peak_stress_ratio"
-    lab_y = lab_e if use_e else lab["tan_delta"].fillna(lab["efficiency"] * tp)
     fig, ax = plt.subplots(figsize=(8, 5.6))
-    scatter(ax, points, "theta_a_deg_92", y, colour, marker)
-    for i, (mat, g) in enumerate(lab.assign(_y=lab_y).groupby("material", sort=True)):
-        ax.scatter(g["theta_a_deg"].fillna(0.0), g["_y"], s=110, marker="*", color=f"C{(i + 6) % 10}",
-                   edgecolors="k", linewidths=0.6, label=f"lab: {mat}", zorder=5)
+    scatter(ax, points, "theta_a_deg_92", "efficiency", colour, marker)
+    for i, (soil, g) in enumerate(lab.groupby("soil", sort=True)):
+        ax.scatter(g["theta_a_deg"], g["efficiency_measured"], s=110, marker="*", color=f"C{(i + 6) % 10}",
+                   edgecolors="k", linewidths=0.6, label=f"lab: {soil}", zorder=5)
     ax.set_xlabel("θa, filter > 92° [° from vertical] (non-dilative at 0)")
-    ax.set_ylabel("efficiency E [-]" if use_e else "peak stress ratio tan δ [-]")
+    ax.set_ylabel("efficiency E [-]")
     ax.set_title("Fig. 6.10b: laboratory data (stars) with the simulations", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")

@@ -68,10 +68,10 @@ def run_case(folder, campaign=None, label: str | None = None):
         rec = {}
     label = label or rec.get("label")
     if campaign is not None and label:
-        from interphase.campaign.plan import _label
+        from interphase.campaign.plan import case_label
 
         for c in campaign.cases:
-            if _label(c.case) == label:
+            if case_label(c.case) == label:
                 return c.case
     inputs = dict(rec.get("inputs") or {})
     if not inputs:

@@ -300,7 +300,7 @@ ENSEMBLE_SHOWN = (("tan δ peak [-]", "tan_delta", 3), ("tan δ critical [-]", "
 
 
 def ensembles_table(df: pd.DataFrame) -> Table:
-    """The seed-ensemble table (report.ensembles.ensemble_table) as a report table: each value with its
+    """The seed-ensemble table (analysis.ensemble_table.ensemble_table) as a report table: each value with its
     interval in one cell (the CSV keeps the raw columns, `_lo`/`_hi` beside each value)."""
     shown = pd.DataFrame({"group": df["group"], "case": df["case"],
                           "seeds (interface / box)": [f"{int(a)} / {int(b)}" for a, b in zip(df["seeds"], df["box_seeds"])]})

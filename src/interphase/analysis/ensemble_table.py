@@ -1,4 +1,5 @@
-"""The report's seed-ensemble table: each physical case's tan δ, its paired box tests' tan φ and E,
+"""The seed-ensemble table (the report's `ensembles`, the sequential seeds' stopping rule, the
+validation's DEM δ): each physical case's tan δ, its paired box tests' tan φ and E,
 at the peak and at the critical state, each with its 95 % interval (analysis.ensemble).
 
 Intervals respect their quantity (analysis.ensemble.seed_interval): tan δ and tan φ on the log scale
@@ -6,9 +7,10 @@ Intervals respect their quantity (analysis.ensemble.seed_interval): tan δ and t
 clipped to [−90°, 90°]; a side with fewer than MIN_SEEDS (3) seeds has no interval, and the note
 column says so.
 
-A physical case is a campaign group's case label without its seed (`…-s3`); its box tests are every
-box test of the soil its seeds are paired with (`box_pools`): the pair_id rows, and the soil tests
-that `[pairs] seeds` ran on further seeds. Curves come from each finished case's series.parquet (shear_disp,
+A physical case is a campaign group's runs of one `physical_id` (interphase.case.physical_id: the
+case without its seed), named by its label without the seed (`…-s3`); its box tests are every box
+test of the soil its seeds are paired with (`box_pools`, by the box tests' physical_id): the pair_id
+rows, and the soil tests that `[pairs] seeds` ran on further seeds. Curves come from each finished case's series.parquet (shear_disp,
 stress_ratio: the window ratio of an interface test, the shear plane's of a box test).
 """
 
@@ -21,11 +23,11 @@ import numpy as np
 import pandas as pd
 
 from interphase.analysis.ensemble import (MIN_SEEDS, ensemble_efficiency, ensemble_strength, physical_case,
-                                          seed_peak_states, values_interval)
+                                          physical_ids, seed_peak_states, values_interval)
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
-COLUMNS = ("group", "case", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi", "tan_delta_cs",
-           "tan_delta_cs_lo", "tan_delta_cs_hi", "tan_phi", "tan_phi_lo", "tan_phi_hi", "tan_phi_cs", "tan_phi_cs_lo",
+COLUMNS = ("group", "case", "physical_id", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi",
+           "tan_delta_cs", "tan_delta_cs_lo", "tan_delta_cs_hi", "tan_phi", "tan_phi_lo", "tan_phi_hi", "tan_phi_cs", "tan_phi_cs_lo",
            "tan_phi_cs_hi", "E", "E_lo", "E_hi", "E_cs", "E_cs_lo", "E_cs_hi", "theta_r_deg", "theta_r_lo",
            "theta_r_hi", "theta_a_deg_92", "note")
 
@@ -37,20 +39,31 @@ _NOT_SOIL = frozenset({"seed", "name", "profile", "test", "friction_ps"})
 
 
 def box_pools(summaries: pd.DataFrame) -> dict[str, tuple[str, ...]]:
-    """{box case_id: every finished box test of the same soil}, the soil being every Case input the
-    summaries carry except the seed (and the surface's fields, empty for a box), and the engine."""
-    from interphase.case import Case
-
+    """{box case_id: every finished box test of the same physical case and engine}: the seeds of one
+    soil test (its `physical_id`). A row without one (a table written before it) is pooled by the
+    Case inputs the summaries carry but the seed (and the surface's fields, empty for a box)."""
     test = summaries.get("test", pd.Series("", index=summaries.index)).astype(str)
     box = summaries[test.eq("box")]
     if box.empty:
         return {}
-    cols = [c for c in (*Case.__dataclass_fields__, "engine") if c in box and c not in _NOT_SOIL]
-    key = (box[cols].astype(str).groupby(cols, dropna=False, sort=False).ngroup() if cols
-           else pd.Series(0, index=box.index))
+    engine = box["engine"].astype(str) if "engine" in box else pd.Series("", index=box.index)
+    key = _soil_key(box) + "@" + engine
     ids = box["case_id"].astype(str)
     pools = ids.groupby(key.to_numpy()).agg(lambda v: tuple(sorted(v)))
     return {cid: pools[k] for cid, k in zip(ids, key)}
+
+
+def _soil_key(box: pd.DataFrame) -> pd.Series:
+    """Each box test's physical_id, or for a row without one its Case columns but the seed."""
+    from interphase.case import Case
+
+    cols = [c for c in Case.__dataclass_fields__ if c in box and c not in _NOT_SOIL]
+    by_cols = (box[cols].astype(str).apply(lambda r: "cols:" + "|".join(map(str, r)), axis=1) if cols
+               else pd.Series("cols:", index=box.index))
+    if "physical_id" not in box:
+        return by_cols
+    have = box["physical_id"]
+    return have.where(have.notna() & have.astype(str).ne(""), by_cols).astype(str)
 
 
 def _mean_interval(values, quantity: str) -> tuple[float, float, float]:
@@ -88,12 +101,12 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
     if summaries is None or summaries.empty or store is None:
         return pd.DataFrame(columns=COLUMNS), {}, {}
     pools = box_pools(summaries)
-    rows = summaries.assign(_case=summaries["label"].map(physical_case))
+    rows = summaries.assign(_case=summaries["label"].map(physical_case), _pid=physical_ids(summaries))
     iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
     cache: dict = {}
     curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, store.curve(cid))
     out, states = [], {}
-    for (group, name), g in iface.groupby(["group", "_case"], sort=True):
+    for (group, name, pid), g in iface.groupby(["group", "_case", "_pid"], sort=True):    # by name, then id
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
         window = PEAK_WINDOW_D50 * d50
         ids = [str(c) for c in g["case_id"]]
@@ -118,7 +131,7 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
             notes.append(f"fewer than {MIN_SEEDS} seeds ({len(a)} interface, {len(b)} box): no interval")
         if math.isfinite(e.peak) and e.peak > e_note:
             notes.append(_why_high(e, g, e_note))
-        out.append(dict(group=group, case=name, seeds=sa.n_seeds, box_seeds=sb.n_seeds,
+        out.append(dict(group=group, case=name, physical_id=pid, seeds=sa.n_seeds, box_seeds=sb.n_seeds,
                         tan_delta=sa.peak, tan_delta_lo=sa.peak_lo, tan_delta_hi=sa.peak_hi,
                         tan_delta_cs=sa.critical, tan_delta_cs_lo=sa.critical_lo, tan_delta_cs_hi=sa.critical_hi,
                         tan_phi=sb.peak, tan_phi_lo=sb.peak_lo, tan_phi_hi=sb.peak_hi, tan_phi_cs=sb.critical,

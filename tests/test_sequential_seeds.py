@@ -1,0 +1,203 @@
+"""Sequential seeds ([seeds]): the schema (bad tables exit 2 naming file, line and field), the round
+logic on tables without an engine, and a tiny real campaign where only the wide case gets a seed."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+sys.path.insert(0, str(Path(__file__).parent))
+from conftest import need_binary  # noqa: E402
+
+from interphase.campaign.plan import plan  # noqa: E402
+from interphase.campaign.schema import SeedRule, load_campaign  # noqa: E402
+from interphase.campaign.sequential import cap_notes, interface_key, replay, wanted_ids  # noqa: E402
+from interphase.cli import main  # noqa: E402
+
+BASE = """[campaign]
+name = "seq"
+engines = ["liggghts"]
+output = "out"
+
+[execution]
+jobs = 2
+
+[case]
+device = "periodic"
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 50e6
+shear_velocity = 0.02
+shear_distance = 0.0005
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 6.0
+
+[sweep]
+friction_ps = [0.05, 0.5]
+"""
+SEEDS = '\n[seeds]\nstart = 3\nmax = {max}\ntarget = {{quantity = "E", halfwidth = {h}}}\n'
+
+# (what replaces the [seeds] table's text, line the message points at, what it must name)
+BAD = {
+    "unknown key": ("[seeds]\nstart = 3\nmax = 4\nstep = 1\nstpe = 2\ntarget = {quantity = \"E\", halfwidth = 0.05}",
+                    26, "seeds.stpe"),
+    "start > max": ("[seeds]\nstart = 5\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0.05}", 23, "seeds.start"),
+    "halfwidth 0": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0}", 25,
+                    "seeds.target.halfwidth"),
+    "negative halfwidth": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E\", halfwidth = -0.1}", 25,
+                           "seeds.target.halfwidth"),
+    "unknown quantity": ("[seeds]\nstart = 3\nmax = 4\ntarget = {quantity = \"E_peak\", halfwidth = 0.05}", 25,
+                         "seeds.target.quantity"),
+    "start of two seeds": ("[seeds]\nstart = 2\nmax = 4\ntarget = {quantity = \"E\", halfwidth = 0.05}", 23,
+                          "seeds.start"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_a_bad_seeds_table_exits_2_naming_file_line_and_field(name, tmp_path, capsys):
+    table, line, field = BAD[name]
+    f = tmp_path / "bad.toml"
+    f.write_text(BASE + "\n" + table + "\n")
+    assert main(["run", str(f), "--dry-run"]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}:{line}: {field}" in err, err
+
+
+def test_seeds_and_a_seed_sweep_is_an_error_naming_both(tmp_path, capsys):
+    f = tmp_path / "both.toml"
+    f.write_text(BASE.replace("friction_ps = [0.05, 0.5]", "friction_ps = [0.05, 0.5]\nseed = [1, 2, 3]")
+                 + SEEDS.format(max=4, h=0.05))
+    assert main(["run", str(f), "--dry-run"]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}:21: sweep.seed" in err and "[seeds] (line 23)" in err, err
+
+
+def test_seeds_plan_every_seed_to_the_cap_and_run_start_first(tmp_path):
+    f = tmp_path / "ok.toml"
+    f.write_text(BASE + SEEDS.format(max=5, h=0.05))
+    c = load_campaign(f)
+    assert c.seeds == SeedRule(3, 5, 1, "E", 0.05)
+    planned = plan(c, identity=lambda name: "0123456789abcdef")
+    assert sorted({p.case.seed for p in planned}) == [1, 2, 3, 4, 5]
+    keys = {interface_key(p) for p in planned if p.role == "interface"}
+    assert len(keys) == 2 and {k[2] for k in keys} == {p.physical_id for p in planned if p.role == "interface"}
+    rounds = replay(c.seeds, {k: set() for k in keys}, lambda k: {})
+    want = wanted_ids(c.seeds, planned, rounds)
+    ran = sorted((p.role, p.case.seed) for p in planned if p.case_id in want)
+    assert ran == [("box", 1), ("box", 2), ("box", 3)] + [("interface", 1)] * 2 + [("interface", 2)] * 2 \
+        + [("interface", 3)] * 2
+
+
+def _t_eval(values: dict):
+    """evaluate() for replay: each case's mean of its seeds 1..k with a 95 % t interval."""
+    def evaluate(k):
+        out = {}
+        for key, n in k.items():
+            v = np.asarray(values[key][:n])
+            half = stats.t.ppf(0.975, n - 1) * v.std(ddof=1) / math.sqrt(n)
+            out[key] = (v.mean(), v.mean() - half, v.mean() + half)
+        return out
+    return evaluate
+
+
+def _named(evaluate):
+    """The evaluator on keys (engine, group, case) from one on case names."""
+    return lambda k: {("e", "g", c): v for c, v in evaluate({key[2]: n for key, n in k.items()}).items()}
+
+
+def _replay(rule, done, evaluate):
+    """sequential.replay on case names: {case: CaseRound}."""
+    return {key[2]: r for key, r in replay(rule, {("e", "g", c): s for c, s in done.items()}, evaluate).items()}
+
+
+def test_rounds_add_seeds_only_where_the_interval_is_wide():
+    rule = SeedRule(start=3, max=6, step=1, quantity="tan_delta", halfwidth=0.05)
+    values = {"narrow": [0.50, 0.51, 0.49, 0.50, 0.5, 0.5], "wide": [0.44, 0.56, 0.5, 0.5, 0.5, 0.5],
+              "noisy": [0.1, 0.9, 0.2, 0.8, 0.3, 0.7]}
+    evaluate = _named(_t_eval(values))
+    replay = _replay
+    # nothing ran: every case asks for seeds 1..start
+    r = replay(rule, {k: set() for k in values}, evaluate)
+    assert {k: v.wanted for k, v in r.items()} == {"narrow": 3, "wide": 3, "noisy": 3}
+    assert all(v.state == "waiting" for v in r.values())
+    # the first round finished: the wide cases get a 4th seed, the narrow one too, its confirming round
+    r = replay(rule, {k: {1, 2, 3} for k in values}, evaluate)
+    assert {k: (v.wanted, v.state) for k, v in r.items()} == {"narrow": (4, "confirming"), "wide": (4, "adding"),
+                                                              "noisy": (4, "adding")}
+    assert r["narrow"].halfwidth <= 0.05 < r["wide"].halfwidth
+    # every seed finished: the rounds replay to the same stops; the narrow case stops after its
+    # confirming round, the wide one reaches the target at the cap, 6 seeds (± 0.040; ± 0.053 at
+    # 5), the noisy one stops at the cap
+    r = replay(rule, {k: set(range(1, 7)) for k in values}, evaluate)
+    assert {k: (v.wanted, v.n, v.state) for k, v in r.items()} == {
+        "narrow": (4, 4, "reached"), "wide": (6, 6, "reached"), "noisy": (6, 6, "capped")}
+    # a case waiting on a run is not judged and does not hold the others back
+    r = replay(rule, {"narrow": {1, 2, 3}, "wide": {1, 2, 3, 5}, "noisy": set(range(1, 7))}, evaluate)
+    assert (r["wide"].wanted, r["wide"].state, r["wide"].finished) == (4, "adding", 4)
+    assert r["noisy"].state == "capped" and r["narrow"].state == "confirming"
+    # step 2: seeds come two at a time, never beyond the cap
+    r = replay(SeedRule(3, 6, 2, "tan_delta", 0.05), {k: set(range(1, 6)) for k in values}, evaluate)
+    assert (r["wide"].n, r["wide"].wanted, r["wide"].state) == (5, 6, "adding")      # judged at 3 and 5
+    assert (r["noisy"].n, r["noisy"].wanted) == (5, 6)
+    assert (r["narrow"].n, r["narrow"].wanted, r["narrow"].state) == (5, 5, "reached")   # 3, then 5 to confirm
+
+
+def test_cap_notes_name_only_the_cases_that_stopped_at_the_cap():
+    import pandas as pd
+
+    rule = SeedRule(3, 6, 1, "E", 0.05)
+    table = pd.DataFrame({"seeds": [6, 6, 4], "E": [1.0, 1.0, 1.0], "E_lo": [0.8, 0.97, 0.7], "E_hi": [1.2, 1.03, 1.3]})
+    notes = cap_notes(table, rule)
+    assert notes[0].startswith("hit the seed cap (6) at ± 0.2 in E") and notes[1] == "" and notes[2] == ""
+
+
+def _status(f: Path) -> dict:
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["status", str(f), "--json"]) == 0
+    return json.loads(buf.getvalue())
+
+
+@pytest.mark.liggghts
+def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
+    """Two physical cases with E as the target. Round 1 (seeds 1–3, cap 3: no interval below 3 seeds)
+    gives each its E interval; then the target is set between the two half-widths and the cap raised
+    to 5: the narrow case runs its one confirming seed (4) and stops, the wide one goes on to seed 5
+    (with its soil test of each seed); nothing finished is rerun, and a rerun runs nothing."""
+    need_binary("liggghts")
+    f = tmp_path / "seq.toml"
+    f.write_text(BASE + SEEDS.format(max=3, h=1e-9))
+    assert main(["run", str(f), "--plain"]) == 0
+    first = {r["case"]: r for r in _status(f)["seeds"]}
+    assert {(r["finished"], r["wanted"], r["state"]) for r in first.values()} == {(3, 3, "capped")}
+    halves = {k: r["halfwidth"] for k, r in first.items()}
+    wide, narrow = sorted(halves, key=halves.get, reverse=True)
+    assert halves[wide] > halves[narrow] > 0
+    out = tmp_path / "out"
+    done_before = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
+    assert len(done_before) == 9                   # 2 cases × 3 seeds + the 3 soil tests
+
+    f.write_text(BASE + SEEDS.format(max=5, h=(halves[wide] + halves[narrow]) / 2))
+    assert main(["run", str(f), "--plain"]) == 0
+    status = _status(f)
+    seeds = {r["case"]: r for r in status["seeds"]}
+    assert (seeds[narrow]["finished"], seeds[narrow]["wanted"], seeds[narrow]["state"]) == (4, 4, "reached")
+    assert (seeds[wide]["finished"], seeds[wide]["wanted"], seeds[wide]["n"]) == (5, 5, 5)
+    assert seeds[wide]["state"] in ("reached", "capped")
+    labels = [r["label"] for r in status["cases"]]
+    box = "box-periodic-box-mu0.9-mono"
+    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{narrow}-s4", f"{box}-s4"])
+    assert sorted(lb for lb in labels if lb.endswith("-s5")) == sorted([f"{wide}-s5", f"{box}-s5"])
+    after = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
+    assert len(after) == 14 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
+    assert main(["run", str(f), "--plain"]) == 0                    # the rounds replay: nothing to run
+    assert {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()} == after
