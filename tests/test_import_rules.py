@@ -30,6 +30,15 @@ def _module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+def _from_target(node: ast.ImportFrom, package: str) -> str:
+    """The absolute module a `from ... import` names, relative levels resolved against `package`."""
+    if not node.level:
+        return node.module
+    base = package.split(".")
+    base = base[:len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def imported_modules(source: str, module: str, is_package: bool = False) -> list[tuple[int, str]]:
     """(line, absolute dotted name) of everything `source` imports, relative imports resolved
     against `module`; `from a import b` yields a.b as well as a (b may be a submodule)."""
@@ -39,12 +48,7 @@ def imported_modules(source: str, module: str, is_package: bool = False) -> list
         if isinstance(node, ast.Import):
             out += [(node.lineno, alias.name) for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module
+            target = _from_target(node, package)
             out.append((node.lineno, target))
             out += [(node.lineno, f"{target}.{alias.name}") for alias in node.names if alias.name != "*"]
     return out
@@ -126,12 +130,7 @@ def module_graph(sources: dict[str, tuple[str, bool]]) -> dict[str, set[str]]:
             if isinstance(node, ast.Import):
                 deps |= {a.name for a in node.names if a.name in sources}
             elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package.split(".")
-                    base = base[:len(base) - (node.level - 1)]
-                    target = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    target = node.module
+                target = _from_target(node, package)
                 for a in node.names:
                     if f"{target}.{a.name}" in sources:
                         deps.add(f"{target}.{a.name}")

@@ -135,14 +135,14 @@ def read_lab(path: str | Path) -> LabTable:
             raise bad(i, "delta_peak", f"{r['delta_peak']:g}° is not an angle of friction (0–90°)")
         if math.isfinite(r["friction"]) and not r["friction"] >= 0:
             raise bad(i, "friction", "particle–surface friction tan φμ must be ≥ 0")
-        _geometry(r, lambda field, msg, fix=None, i=i: bad(i, field, msg, fix))
+        tooth_geometry(r, lambda field, msg, fix=None, i=i: bad(i, field, msg, fix))
     delta = np.where(np.isfinite(out["delta_peak"]), out["delta_peak"],
                      np.degrees(np.arctan(out["tan_delta_peak"].to_numpy(float))))
     out["delta_peak"] = delta
     return LabTable(p, out)
 
 
-def _geometry(r, bad) -> tuple[float, float, float]:
+def tooth_geometry(r, bad) -> tuple[float, float, float]:
     """(height, width, root spacing) [m] of a row's teeth; flat → zeros. Checks the surface fields."""
     kind = r["surface"].lower()
     if kind not in SURFACES:
@@ -184,7 +184,7 @@ def profile_of(row, d50: float | None = None):
     def never(field, msg, fix=None):
         raise InputError(msg, where=field, fix=fix)
 
-    h, w, sr = _geometry(row, never)
+    h, w, sr = tooth_geometry(row, never)
     kind = row["surface"].lower()
     d = float(row["d50"]) if d50 is None else d50
     if kind == "flat":

@@ -25,7 +25,7 @@ PROTOCOL = {"test": "interface", "device": "periodic", "shear_velocity": 0.02, "
 
 def profile_spec(row, d50: float, folder: Path) -> dict:
     """The campaign profile of a lab row in the card's D50 units (sawtooth, flat; a ramp as a file)."""
-    from interphase.lab import _geometry, profile_of
+    from interphase.lab import tooth_geometry, profile_of
 
     def never(field, msg, fix=None):
         raise InputError(msg, where=field, fix=fix)
@@ -33,7 +33,7 @@ def profile_spec(row, d50: float, folder: Path) -> dict:
     kind = row["surface"].lower()
     if kind == "flat":
         return {"kind": "flat"}
-    h, w, sr = _geometry(row, never)
+    h, w, sr = tooth_geometry(row, never)
     lab_d50 = float(row["d50"])
     if kind == "sawtooth":
         return {"kind": "sawtooth", "rt": h / lab_d50, "sw": w / lab_d50, "sr": sr / lab_d50}
