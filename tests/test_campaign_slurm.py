@@ -122,3 +122,58 @@ def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
     again = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
                            env=env, capture_output=True, text=True, timeout=120)
     assert "0 to run" in again.stdout, again.stdout
+
+
+SEQUENTIAL = """
+[campaign]
+name = "slurm-seq"
+engines = ["liggghts"]
+output = "out"
+
+[execution]
+executor = "slurm"
+time_limit = 5            # one time-limit bucket: one array per round
+max_concurrent = 2
+
+[case]
+device = "periodic"
+profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
+shear_modulus = 50e6
+shear_velocity = 0.02
+shear_distance = 0.0005
+snapshot_every = 0.00025
+box_length_d50 = 12.0
+box_height_d50 = 6.0
+friction_ps = 0.5
+
+[seeds]
+start = 3
+max = 4
+target = {quantity = "E", halfwidth = 1e-9}   # out of reach: the case goes on to the cap
+"""
+
+
+def test_sequential_rounds_run_as_one_slurm_array_each(slurm, tmp_path):
+    """Sequential seeds on the real slurmctld: round 1 (seeds 1–3 of the interface case and their
+    soil tests) is one job array, round 2 (seed 4 and its soil test, the target being out of reach)
+    a second one; every run finished through SLURM, each under its round's array."""
+    camp = tmp_path / "seq.toml"
+    camp.write_text(SEQUENTIAL)
+    env = slurm.env()
+    run = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
+                         env=env, capture_output=True, text=True, timeout=400)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "round 2" in run.stdout, run.stdout
+    out = tmp_path / "out"
+    arrays: dict[str, set[int]] = {}
+    for folder in out.iterdir():
+        if not (folder / "DONE").exists():
+            continue
+        meta = json.loads((folder / "case.json").read_text())
+        array, _, index = str(meta["slurm_job"]).partition("_")
+        assert index.isdigit(), meta["slurm_job"]                 # an array task, not a lone job
+        arrays.setdefault(array, set()).add(meta["inputs"]["seed"])
+    assert len(arrays) == 2, arrays
+    first, second = (arrays[a] for a in sorted(arrays, key=int))
+    assert first == {1, 2, 3} and second == {4}, arrays
+    assert sum(1 for f in out.iterdir() if (f / "DONE").exists()) == 8     # 4 interface + 4 soil tests

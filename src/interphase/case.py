@@ -84,6 +84,10 @@ class Case:
                                             # box_depth_d50, grains filling the depth (docs/3d.md)
     box_depth_d50: float = 10.0             # the 3D cell's depth in y [D50] (periodic3d only; not in
                                             # the identity of other devices)
+    profile_y: ProfileSpec | None = None    # periodic3d interface only: the relief across the shear;
+                                            # the surface is z(x, y) = profile(x) + profile_y(y) and
+                                            # the depth is profile_y's periodic cell nearest
+                                            # box_depth_d50 (docs/3d.md). None: the profile extruded
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
     start: Start | None = None              # None: the engine's own lattice and consolidation; else
                                             # another run's consolidated specimen (set by the plan,
@@ -110,6 +114,12 @@ class Case:
         if self.device != "periodic3d" and self.box_depth_d50 != 10.0:
             bad("box_depth_d50", f"only the 3D device has a depth (device is {self.device!r})",
                 'use device = "periodic3d", or remove box_depth_d50')
+        if self.profile_y is not None and not (self.three_d and self.test == "interface"):
+            bad("profile_y", "only an interface test in the 3D device has relief across the shear",
+                'use device = "periodic3d" and test = "interface", or remove profile_y')
+        if self.profile_y is not None and not isinstance(self.profile_y, ProfileSpec):
+            bad("profile_y", f"must be a profile table, got {self.profile_y!r}",
+                'e.g. profile_y = {kind = "sawtooth", rt = 0.2, sw = 2, sr = 0}')
         if self.three_d and self.start is not None:
             bad("start", "a 3D case cannot start from another engine's specimen (LIGGGHTS only, docs/3d.md)",
                 "remove specimen_from for 3D cases")
@@ -167,7 +177,9 @@ class Case:
     @property
     def box_depth(self) -> float:
         """The 3D cell's depth in y [m] (box_depth_d50·D50); NaN for the quasi-2D devices."""
-        return self.box_depth_d50 * self.d50 if self.three_d else math.nan
+        if not self.three_d:
+            return math.nan
+        return self._cell_y.length if self.profile_y is not None else self.box_depth_d50 * self.d50
 
     @property
     def box_length(self) -> float:
@@ -185,6 +197,18 @@ class Case:
         from interphase.surface.builder import periodic_cell
 
         return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50)
+
+    @functools.cached_property
+    def _cell_y(self):
+        """The 3D device's relief across the shear: profile_y's periodic cell nearest the requested
+        depth, its abscissa the y coordinate from the cell's side (−W/2)."""
+        from interphase.surface.builder import periodic_cell
+
+        return periodic_cell(self.profile_y, self.d50, self.box_depth_d50 * self.d50)
+
+    def surface_across(self):
+        """The relief across the shear (a Profile whose x is y + W/2 [m]), or None: extruded."""
+        return self._cell_y if self.profile_y is not None else None
 
     @property
     def thickness(self) -> float:
@@ -247,7 +271,7 @@ class Case:
             if not f.compare:
                 continue
             v = getattr(self, f.name)
-            if (f.name == "start" and v is None) or (f.name == "preparation" and v == 1.0) \
+            if (f.name in ("start", "profile_y") and v is None) or (f.name == "preparation" and v == 1.0) \
                     or (f.name == "box_depth_d50" and not self.three_d):
                 continue            # the usual start and preparation, a 2D device's depth: no key, so every case id without them stays as it was
             if isinstance(v, (ProfileSpec, Gradation, Start)):
@@ -261,6 +285,8 @@ class Case:
         if self.name:
             return self.name
         surface = self.profile.label() if self.profile else "box"
+        if self.profile_y is not None:
+            surface += f"-y-{self.profile_y.label()}"
         grading = "user" if self.gradation.sizes else self.gradation.name
         test = f"{self.test}-{self.device}" if self.periodic else self.test
         prep = "" if self.preparation == 1.0 else f"-prep{self.preparation:g}"
@@ -322,12 +348,9 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     {kind = "file", path = "x.csv", units = "um", cutoff = 0.0008}; a relative path is taken from
     `base_dir` (the campaign file's folder). `gradation` is "mono" | "poly" or
     {sizes = [m...], fractions = [...]}. Unknown keys are refused with a did-you-mean.
-    `where` prefixes every message (e.g. "group1.toml: [case]").
+    `where` prefixes every message (e.g. "group1.toml: [case]"). `profile_y` (the 3D device's
+    relief across the shear) takes the same tables as `profile`.
     """
-    from pathlib import Path
-
-    from interphase.surface.builder import file_spec
-
     fields = {f.name: f for f in dataclasses.fields(Case) if f.name not in PLANNED_FIELDS}
     kwargs = {}
     for key, value in data.items():
@@ -336,31 +359,9 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
         if key not in fields:
             raise InputError(f"unknown key {key!r}", where=where, fix=_did_you_mean(key, fields))
         kwargs[key] = value
-    prof = kwargs.get("profile")
-    if prof is not None:
-        if isinstance(prof, str):
-            prof = {"kind": "file", "path": prof} if prof not in ("flat",) else {"kind": "flat"}
-        if not isinstance(prof, dict) or "kind" not in prof:
-            raise InputError("profile must be a table with a 'kind'", where=f"{where}.profile",
-                             fix="e.g. profile = {kind = \"sawtooth\", rt = 1, sw = 2, sr = 0}")
-        prof = dict(prof)
-        kind = prof.pop("kind")
-        if kind == "file":
-            allowed = {"path", "units", "cutoff", "axis", "line", "direction"}
-            for k in prof:
-                if k not in allowed:
-                    raise InputError(f"unknown key {k!r} in a file profile", where=f"{where}.profile",
-                                     fix=_did_you_mean(k, allowed))
-            if "path" not in prof:
-                raise InputError("a file profile needs a path", where=f"{where}.profile.path")
-            path = Path(prof["path"])
-            if base_dir is not None and not path.is_absolute():
-                path = Path(base_dir) / path
-            kwargs["profile"] = file_spec(path, units=prof.get("units"), cutoff=prof.get("cutoff"),
-                                          where=f"{where}.profile", axis=prof.get("axis"),
-                                          line=prof.get("line"), direction=prof.get("direction", "+"))
-        else:
-            kwargs["profile"] = ProfileSpec.make(kind, where=f"{where}.profile", **prof)
+    for key in ("profile", "profile_y"):
+        if kwargs.get(key) is not None:
+            kwargs[key] = _profile_spec(kwargs[key], f"{where}.{key}", base_dir)
     grad = kwargs.get("gradation")
     if grad is not None:
         if isinstance(grad, str):
@@ -388,3 +389,33 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
         if isinstance(value, int) and not isinstance(value, bool) and fields[key].type in ("float", float):
             kwargs[key] = float(value)
     return Case(**kwargs)
+
+
+def _profile_spec(prof, where: str, base_dir) -> ProfileSpec:
+    """A profile table (or a file path) of a case table as a ProfileSpec; `where` names the key."""
+    from pathlib import Path
+
+    from interphase.surface.builder import file_spec
+
+    if isinstance(prof, ProfileSpec):
+        return prof
+    if isinstance(prof, str):
+        prof = {"kind": "file", "path": prof} if prof not in ("flat",) else {"kind": "flat"}
+    if not isinstance(prof, dict) or "kind" not in prof:
+        raise InputError(f"{where.rsplit('.', 1)[-1]} must be a table with a 'kind'", where=where,
+                         fix="e.g. {kind = \"sawtooth\", rt = 1, sw = 2, sr = 0}")
+    prof = dict(prof)
+    kind = prof.pop("kind")
+    if kind != "file":
+        return ProfileSpec.make(kind, where=where, **prof)
+    allowed = {"path", "units", "cutoff", "axis", "line", "direction"}
+    for k in prof:
+        if k not in allowed:
+            raise InputError(f"unknown key {k!r} in a file profile", where=where, fix=_did_you_mean(k, allowed))
+    if "path" not in prof:
+        raise InputError("a file profile needs a path", where=f"{where}.path")
+    path = Path(prof["path"])
+    if base_dir is not None and not path.is_absolute():
+        path = Path(base_dir) / path
+    return file_spec(path, units=prof.get("units"), cutoff=prof.get("cutoff"), where=where, axis=prof.get("axis"),
+                     line=prof.get("line"), direction=prof.get("direction", "+"))

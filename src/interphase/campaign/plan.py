@@ -73,6 +73,9 @@ def flat_params(case: Case) -> dict:
         if key == "start":
             out["start"] = case.start.label()
             continue
+        if key == "profile_y":          # 3D relief across the shear: its label (a scalar column)
+            out["profile_y"] = case.profile_y.label()
+            continue
         if key == "gradation":
             out["gradation"] = value if isinstance(value, str) else "user"
             continue

@@ -828,7 +828,7 @@ def _pair_options(ctx: _Ctx, pairs: dict, has_interface: bool) -> tuple[bool, di
     if not isinstance(overrides, dict):
         raise ctx.error(("pairs", "case"), "must be a table of Case fields")
     _check_case_keys(ctx, overrides, ("pairs", "case"))
-    for bad in ("test", "profile", "friction_ps"):
+    for bad in ("test", "profile", "profile_y", "friction_ps"):
         if bad in overrides:
             raise ctx.error(("pairs", "case", bad), f"{bad} of a paired box test is set by the campaign",
                             "remove it (box tests have no surface)")
@@ -843,7 +843,7 @@ def _pair_options(ctx: _Ctx, pairs: dict, has_interface: bool) -> tuple[bool, di
 def _box_of(ctx: _Ctx, c: CampaignCase, overrides: dict) -> CampaignCase:
     """The paired box test of interface case `c`: its soil (every field but the surface), walls at
     friction_pw, [pairs].case overrides."""
-    data = {k: v for k, v in c.case.canonical().items() if k not in ("profile", "test", "friction_ps")}
+    data = {k: v for k, v in c.case.canonical().items() if k not in ("profile", "profile_y", "test", "friction_ps")}
     data.update(test="box", friction_ps=c.case.friction_pw, **overrides)
     data = {k: v for k, v in data.items() if v is not None}
     try:

@@ -18,7 +18,8 @@ frame).
 A servo platen holds σ·L·t on top of the soil (t = D50, the quasi-2D thickness).
 The 3D device (Case.three_d, docs/3d.md) is the periodic one made deep: also periodic in y over
 [−W/2, W/2] (W = Case.box_depth = t), grains on a 3D lattice filling it, every wall (surface,
-platen, the box test's floor) extruded over exactly that depth (`wall_reach` = W/2).
+platen, the box test's floor) extruded over exactly that depth (`wall_reach` = W/2); a case with
+relief across the shear (Case.profile_y) has the areal surface z = p(x) + q(y) as its mesh instead.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from interphase.errors import InputError
 from interphase.engines.packing import Packing, lattice_packing, lattice_packing_3d, start_packing
 from interphase.material import rayleigh_time, youngs_modulus
 from interphase.recipe import RECIPE, Recipe, RunRecord, Steps
+from interphase.surface.mesh import separable_triangles
 
 Segment = tuple[float, float, float, float]
 
@@ -63,6 +65,8 @@ class Device:
     periodic: bool = False             # x periodic over [x_lo, x_hi] = [0, L]
     bed: tuple[int, ...] = ()          # periodic box: grains (packing indices) frozen to the moving floor
     depth: float | None = None         # 3D device: y periodic over [−depth/2, depth/2] [m]; None: quasi-2D
+    surface_mesh: tuple[np.ndarray, np.ndarray] | None = None   # 3D areal surface: (points, triangles) [m];
+                                       # None: the moving segments extruded over the depth
 
     shear_sign = 1
 
@@ -220,10 +224,14 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     L, d50 = case.box_length, case.d50
     dt = time_step(case, recipe)
     bed: tuple[int, ...] = ()
+    surface_mesh = None
     lattice = lattice_packing_3d if case.three_d else lattice_packing
     if case.test == "interface":
-        prof = case.surface()
+        prof, across = case.surface(), case.surface_across()
         top, z_lo = float(prof.z.max()), float(prof.z.min()) - d_max
+        if across is not None:     # z(x, y) = p(x) + q(y): its highest and lowest points add
+            top, z_lo = top + float(across.z.max()), z_lo + float(across.z.min())
+            surface_mesh = separable_triangles(prof, across, -case.box_depth / 2)
         pack = lattice(case, 0.0, L, top + 0.02 * d_max)
         moving = _segments(prof.x, prof.z)
         window = (0.0, L, top + d_max)
@@ -247,7 +255,8 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
                   platen=_segments(xs, zs), platen_com=(L / 2, base),
                   platen_force=case.normal_stress * L * case.thickness,
                   bounds=(0.0, L, z_lo, top), window=window, packing=pack,
-                  steps=step_counts(case, dt, recipe), periodic=True, bed=bed, depth=depth)
+                  steps=step_counts(case, dt, recipe), periodic=True, bed=bed, depth=depth,
+                  surface_mesh=surface_mesh)
 
 
 def _started(case: Case, lattice: Packing, platen_z: float) -> tuple[Packing, float]:

@@ -42,8 +42,11 @@ def mesh_files(dev: Device) -> dict[str, str]:
     walls = {name: segs for name, segs in walls.items() if segs}
     if dev.exits:
         walls |= {"exit_left": dev.exits[:1], "exit_right": dev.exits[1:]}
-    return {f"{name}.stl": stl_text(*segment_triangles(segs, -dev.wall_reach, dev.wall_reach))
-            for name, segs in walls.items()}
+    files = {f"{name}.stl": stl_text(*segment_triangles(segs, -dev.wall_reach, dev.wall_reach))
+             for name, segs in walls.items()}
+    if dev.surface_mesh is not None:      # an areal surface (3D): its own triangles
+        files[f"{dev.wall_names[0]}.stl"] = stl_text(*dev.surface_mesh)
+    return files
 
 
 def deck_values(dev: Device) -> dict:

@@ -1,7 +1,9 @@
-"""A profile as a quasi-2D extruded surface: triangles and ASCII STL (meshio) for the engines.
+"""Surfaces as triangles and ASCII STL (meshio) for the engines.
 
-Each profile segment (x0, z0)→(x1, z1) becomes the rectangle y ∈ [y_min, y_max], split into two
-triangles wound so that their normals point up (+z, into the soil).
+An extruded profile: each segment (x0, z0)→(x1, z1) becomes the rectangle y ∈ [y_min, y_max], split
+into two triangles. An areal surface z(x, y) = p(x) + q(y) (`separable_triangles`): two triangles
+per cell of the grid of both profiles' vertices. Every triangle is wound so that its normal points
+up (+z, into the soil).
 """
 
 from __future__ import annotations
@@ -24,6 +26,22 @@ def extruded_triangles(profile: Profile, y_min: float, y_max: float) -> tuple[np
     i = np.arange(n - 1)
     # (A, B, C) and (A, C, D) with A = lo[i], B = lo[i+1], C = hi[i+1], D = hi[i]: normal (−dz, 0, dx)·Δy
     tri = np.vstack([np.column_stack([i, i + 1, n + i + 1]), np.column_stack([i, n + i + 1, n + i])])
+    return points, tri
+
+
+def separable_triangles(along: Profile, across: Profile, y0: float) -> tuple[np.ndarray, np.ndarray]:
+    """The areal surface z(x, y) = along.z(x) + across.z(y − y0) [m] over the grid of both profiles'
+    vertices (`across.x` are its y coordinates, shifted by y0): (points (N·M, 3), triangles
+    (2(N−1)(M−1), 3) int). Both profiles are piecewise linear with kinks only at their vertices, so
+    within a grid cell z = a + b·x + c·y is a plane: the two triangles are the surface exactly."""
+    x, y = along.x, across.x + y0
+    n, m = x.size, y.size
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    Z = along.z[:, None] + across.z[None, :]
+    points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
+    k = (np.arange(n - 1)[:, None] * m + np.arange(m - 1)[None, :]).ravel()   # vertex (i, j) of each cell
+    # (i,j), (i+1,j), (i+1,j+1) and (i,j), (i+1,j+1), (i,j+1): counter-clockwise seen from +z
+    tri = np.vstack([np.column_stack([k, k + m, k + m + 1]), np.column_stack([k, k + m + 1, k + 1])])
     return points, tri
 
 
