@@ -8,13 +8,14 @@ per mm of shear (LIGGGHTS' "Loop time" of its last run, the shear), its particle
 and the whole case's wall time; plus the summary's stress ratio and θr as a sanity check.
 
 Run: PYTHONPATH=src .venv/bin/python bench/bench_3d_cost.py [L,W,H ...]   (default 10,5,10 14,7,10 20,10,10)
+     [--shear MM] [--velocity M_S]   (the campaigns' protocol: --shear 6 --velocity 0.02)
+LIGGGHTS on several ranks: INTERPHASE_LIGGGHTS_LAUNCHER="mpirun -np 2" (engines.base.EngineProfile).
 """
 
 from __future__ import annotations
 
 import json
 import re
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -25,13 +26,15 @@ from interphase.engines.device import device
 from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
 
-SHEAR = 1e-3        # [m]
+SHEAR = 1e-3        # [m], default
+VELOCITY = 0.05     # [m/s], default
 
 
-def case_of(length: float, depth: float, height: float) -> Case:
+def case_of(length: float, depth: float, height: float, shear: float = SHEAR, velocity: float = VELOCITY) -> Case:
     return Case(profile=ProfileSpec.make("sawtooth", rt=1, sw=2, sr=0), device="periodic3d", gradation=Gradation("poly"),
                 box_length_d50=length, box_depth_d50=depth, box_height_d50=height, friction_ps=0.5,
-                shear_modulus=50e6, shear_velocity=0.05, shear_distance=SHEAR, snapshot_every=0.25e-3)
+                shear_modulus=50e6, shear_velocity=velocity, shear_distance=shear,
+                snapshot_every=max(0.25e-3, shear / 12))
 
 
 def shear_loop(log: Path) -> tuple[float, int]:
@@ -40,11 +43,11 @@ def shear_loop(log: Path) -> tuple[float, int]:
     return float(loops[-1][0]), int(loops[-1][1])
 
 
-def main(sizes):
+def main(sizes, shear: float = SHEAR, velocity: float = VELOCITY):
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for length, depth, height in sizes:
-            case = case_of(length, depth, height)
+            case = case_of(length, depth, height, shear, velocity)
             n = device(case).n_grains
             t0 = time.perf_counter()
             out = run_case(case, "liggghts", Path(tmp, f"c{length}x{depth}x{height}"))
@@ -55,7 +58,7 @@ def main(sizes):
             sec, steps = shear_loop(folder / "log.liggghts")
             s = out["summary"]
             rows.append(dict(cell=f"{length:g} × {depth:g} × {height:g}", grains=n, engine_s=timings.get("execute"),
-                             shear_s_per_mm=sec / (SHEAR * 1e3), rate=n * steps / sec, wall_s=wall,
+                             shear_s_per_mm=sec / (shear * 1e3), rate=n * steps / sec, wall_s=wall,
                              peak=s["peak_stress_ratio"], theta_r=s["theta_r_surface_deg"], r_yy=s["r_yy_surface"]))
             print(json.dumps(rows[-1]), flush=True)
     print("\n| cell L × W × H [D50] | grains | engine [s] | shear [s per mm] | particle-steps/s | case wall [s] "
@@ -67,5 +70,11 @@ def main(sizes):
 
 
 if __name__ == "__main__":
-    args = sys.argv[1:] or ["10,5,10", "14,7,10", "20,10,10"]
-    main([tuple(float(v) for v in a.split(",")) for a in args])
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("sizes", nargs="*", default=["10,5,10", "14,7,10", "20,10,10"], help="L,W,H in D50")
+    ap.add_argument("--shear", type=float, default=SHEAR * 1e3, help="shear distance [mm]")
+    ap.add_argument("--velocity", type=float, default=VELOCITY, help="shear velocity [m/s]")
+    a = ap.parse_args()
+    main([tuple(float(v) for v in x.split(",")) for x in a.sizes], a.shear * 1e-3, a.velocity)
