@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from campaign_files import TINY_CASE, write_toml  # noqa: E402
 from conftest import need_binary  # noqa: E402
 
 from interphase.campaign.runner import stale_engine_pids  # noqa: E402
@@ -24,39 +25,17 @@ from interphase.cli import main  # noqa: E402
 pytestmark = pytest.mark.liggghts
 
 # six tiny real cases of a few seconds each (slow shear so that a run can be caught mid-way)
-CAMPAIGN = """
-[campaign]
-name = "resume"
-engines = ["liggghts"]
-output = "out"
-
-[execution]
-jobs = 2
-
-[case]
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 50e6
-shear_velocity = 0.01
-shear_distance = 0.0005
-snapshot_every = 0.00025
-box_length_d50 = 12.0
-box_height_d50 = 6.0
-
-[sweep]
-friction_ps = [0.05, 0.2, 0.5]
-seed = [1, 2]
-
-[pairs]
-box = false
-"""
+TABLES = dict(campaign={"name": "resume", "engines": ["liggghts"], "output": "out"},
+              execution={"jobs": 2},
+              case={**TINY_CASE, "shear_velocity": 0.01},
+              sweep={"friction_ps": [0.05, 0.2, 0.5], "seed": [1, 2]},
+              pairs={"box": False})
 
 
 @pytest.fixture
 def campaign(tmp_path):
     need_binary("liggghts")
-    f = tmp_path / "resume.toml"
-    f.write_text(CAMPAIGN)
-    return f
+    return write_toml(tmp_path / "resume.toml", **TABLES)
 
 
 def _start(camp: Path, *args) -> subprocess.Popen:
@@ -206,10 +185,9 @@ def test_dry_run_lists_and_renders_without_running(campaign, capsys):
 
 def test_failed_cases_are_kept_until_rerun_failed(tmp_path):
     need_binary("liggghts")
-    f = tmp_path / "hostile.toml"
     # valid Case, refused by LIGGGHTS at run time (Young's modulus below its hard-particle floor)
-    f.write_text(CAMPAIGN.replace("shear_modulus = 50e6", "shear_modulus = 1e6")
-                 .replace("seed = [1, 2]", "seed = [1]").replace("[0.05, 0.2, 0.5]", "[0.2]"))
+    f = write_toml(tmp_path / "hostile.toml", **(TABLES | {"case": TABLES["case"] | {"shear_modulus": 1e6},
+                                                         "sweep": {"friction_ps": [0.2], "seed": [1]}}))
     cmd = [sys.executable, "-m", "interphase.cli", "run", str(f), "--plain"]
     first = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert first.returncode == 1, first.stdout + first.stderr
@@ -232,11 +210,10 @@ def test_a_case_waits_for_the_specimen_it_starts_from(tmp_path):
     run` runs the YADE case from its specimen."""
     need_binary("liggghts")
     need_binary("yade")
-    f = tmp_path / "pair.toml"
-    f.write_text(CAMPAIGN.replace('engines = ["liggghts"]', 'engines = ["liggghts", "yade"]\nspecimen_from = "liggghts"')
-                 .replace("seed = [1, 2]", "seed = [1]").replace("[0.05, 0.2, 0.5]", "[0.2]")
-                 .replace("[case]\n", '[case]\ndevice = "periodic"\nshear_velocity = 0.05\n')
-                 .replace("shear_velocity = 0.01\n", ""))
+    f = write_toml(tmp_path / "pair.toml", **(TABLES | {
+        "campaign": TABLES["campaign"] | {"engines": ["liggghts", "yade"], "specimen_from": "liggghts"},
+        "case": {"device": "periodic", **TINY_CASE, "shear_velocity": 0.05},
+        "sweep": {"friction_ps": [0.2], "seed": [1]}}))
     cmd = [sys.executable, "-m", "interphase.cli", "run", str(f), "--plain"]
     env = dict(os.environ, INTERPHASE_LIGGGHTS_BINARY=str(tmp_path / "no-liggghts"))
     first = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)

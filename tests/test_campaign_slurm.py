@@ -18,53 +18,26 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from campaign_files import TINY_CASE, write_toml  # noqa: E402
 from conftest import need_binary  # noqa: E402
 from slurm_cluster import SlurmCluster  # noqa: E402
 
 pytestmark = [pytest.mark.slurm, pytest.mark.liggghts]
 
-CAMPAIGN = """
-[campaign]
-name = "slurm-test"
-engines = ["liggghts"]
-output = "out"
-
-[execution]
-executor = "slurm"
-time_limit = 1            # minutes: the long case cannot make it
-max_concurrent = 2
-
-[case]
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 50e6
-shear_distance = 0.0005
-snapshot_every = 0.00025
-box_length_d50 = 12.0
-box_height_d50 = 6.0
-
-[pairs]
-box = false
-
-[[group]]
-name = "ok"
-[group.sweep]
-friction_ps = [0.2, 0.5]
-
-[[group]]
-name = "hostile"          # valid Case, but LIGGGHTS refuses Young's modulus < 5 MPa for hard grains
-[group.case]
-shear_modulus = 1e6
-
-[[group]]
-name = "long_shear"       # 80× the shear of the others: grains leave the tiny box under the side wall
-[group.case]              # (~20 s of engine time quiet, up to ~45 s on a loaded machine: well inside 1 min)
-shear_distance = 0.04
-
-[[group]]
-name = "long"             # 1000× slower shear: minutes of engine time, far beyond the 1-minute limit
-[group.case]
-shear_velocity = 0.00005
-"""
+TABLES = dict(
+    campaign={"name": "slurm-test", "engines": ["liggghts"], "output": "out"},
+    # time_limit [min]: the long case cannot make it
+    execution={"executor": "slurm", "time_limit": 1, "max_concurrent": 2},
+    case=TINY_CASE,
+    pairs={"box": False},
+    group=[{"name": "ok", "sweep": {"friction_ps": [0.2, 0.5]}},
+           # valid Case, but LIGGGHTS refuses Young's modulus < 5 MPa for hard grains
+           {"name": "hostile", "case": {"shear_modulus": 1e6}},
+           # 80× the shear of the others: grains leave the tiny box under the side wall (~20 s of engine
+           # time quiet, up to ~45 s on a loaded machine: well inside 1 min)
+           {"name": "long_shear", "case": {"shear_distance": 0.04}},
+           # 1000× slower shear: minutes of engine time, far beyond the 1-minute limit
+           {"name": "long", "case": {"shear_velocity": 0.00005}}])
 
 
 @pytest.fixture(scope="module")
@@ -77,8 +50,7 @@ def slurm(tmp_path_factory):
 
 
 def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
-    camp = tmp_path / "slurm.toml"
-    camp.write_text(CAMPAIGN)
+    camp = write_toml(tmp_path / "slurm.toml", **TABLES)
     env = slurm.env()
     run = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
                          env=env, capture_output=True, text=True, timeout=300)

@@ -6,23 +6,16 @@ import pandas as pd
 import pytest
 
 from interphase.cli import main
+from tests.campaign_files import TINY_CASE, toml_text, write_toml
 
-CASE = """[case]
-test = "interface"
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 5e7
-n_grains = 150
-box_length_d50 = 15
-box_height_d50 = 10
-shear_distance = 0.001
-snapshot_every = 0.0005
-"""
+#: the tiny case, a little larger (150 grains in 15 × 10 D50) and sheared 1 mm
+CASE = {"test": "interface", **TINY_CASE, "n_grains": 150, "box_length_d50": 15, "box_height_d50": 10,
+        "shear_distance": 0.001, "snapshot_every": 0.0005}
 
 
 @pytest.mark.liggghts
 def test_render_then_run_case(tmp_path, capsys):
-    toml = tmp_path / "c.toml"
-    toml.write_text(CASE)
+    toml = write_toml(tmp_path / "c.toml", case=CASE)
     assert main(["render", str(toml), "-o", str(tmp_path / "dry"), "--json"]) == 0
     files = json.loads(capsys.readouterr().out)["files"]
     assert "in.deck" in files and (tmp_path / "dry" / "surface.stl").exists()
@@ -39,8 +32,9 @@ def test_render_then_run_case(tmp_path, capsys):
                                           ("profile = {kind = 'zigzag'}", "profile.kind")])
 def test_bad_case_toml_exit_2(tmp_path, capsys, extra, needle):
     toml = tmp_path / "bad.toml"
-    toml.write_text(CASE.replace('profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}\n', "") + extra + "\n"
-                    if "profile" in extra else CASE + extra + "\n")
+    # a bad profile replaces the good one (TOML refuses a key given twice)
+    case = {k: v for k, v in CASE.items() if not (k == "profile" and "profile" in extra)}
+    toml.write_text(toml_text(case=case) + extra + "\n")
     assert main(["render", str(toml), "-o", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err
     assert str(toml) in err and needle in err

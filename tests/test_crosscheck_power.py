@@ -28,6 +28,7 @@ import pytest
 from interphase.campaign.crosscheck import METRICS, crosscheck
 from interphase.cli import main
 from interphase.engines.yade import Yade
+from tests.campaign_files import toml_text
 from tests.conftest import need_binary
 
 #: the gross mis-mapping of the power study: each alteration alone or together
@@ -149,44 +150,17 @@ def test_mismapping_alters_only_the_named_parameters():
 # The true mapping's runs are also this suite's real cross-check of both engines (the table, its
 # files, the JSON of the CLI): one module-scoped run serves both tests.
 
-TINY_PERIODIC = """\
-[campaign]
-name = "xc-power-tiny"
-engines = ["liggghts", "yade"]
-specimen_from = "liggghts"
-
-[execution]
-executor = "local"
-jobs = 2
-
-[case]
-test = "interface"
-device = "periodic"
-profile = {kind = "flat"}
-gradation = "mono"
-d50 = 0.0007
-shear_modulus = 50e6
-friction_ps = 0.2
-rolling_friction = 0.1
-restitution = 0.5
-shear_velocity = 0.05
-shear_distance = 0.001
-snapshot_every = 0.00025
-box_length_d50 = 12.0
-box_height_d50 = 8.0
-
-[sweep]
-seed = [1, 2, 3]
-
-[pairs]
-box = false
-
-[crosscheck]
-critical_ratio_abs = 0.03
-angle_deg = 3.0
-overlap_rel = 0.10
-stress_ratio_rel = 0.10
-"""
+TINY_PERIODIC_TABLES = dict(
+    campaign={"name": "xc-power-tiny", "engines": ["liggghts", "yade"], "specimen_from": "liggghts"},
+    execution={"executor": "local", "jobs": 2},
+    case={"test": "interface", "device": "periodic", "profile": {"kind": "flat"}, "gradation": "mono",
+          "d50": 0.0007, "shear_modulus": 50e6, "friction_ps": 0.2, "rolling_friction": 0.1, "restitution": 0.5,
+          "shear_velocity": 0.05, "shear_distance": 0.001, "snapshot_every": 0.00025,
+          "box_length_d50": 12.0, "box_height_d50": 8.0},
+    sweep={"seed": [1, 2, 3]},
+    pairs={"box": False},
+    crosscheck={"critical_ratio_abs": 0.03, "angle_deg": 3.0, "overlap_rel": 0.10, "stress_ratio_rel": 0.10})
+TINY_PERIODIC = toml_text(**TINY_PERIODIC_TABLES)
 
 
 def _copy_done(src, dst, engine: str = "liggghts") -> None:
@@ -322,11 +296,9 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
 # The standard set's rolling-held flat exactly (20 × 12 D50, ~250 well-graded grains, 3 mm): on the
 # tiny cell rolling off does not move θr within 1 mm, nor on this cell within 2 mm (true +0.47°
 # [−3.0, +3.9], off −1.5° [−6.7, +3.7]: both undecided; docs/crosscheck.md, power)
-ROLLING_CELL = (TINY_PERIODIC.replace("friction_ps = 0.2", "friction_ps = 0.5")
-                .replace('gradation = "mono"', 'gradation = "poly"')
-                .replace("box_length_d50 = 12.0", "box_length_d50 = 20.0")
-                .replace("box_height_d50 = 8.0", "box_height_d50 = 12.0")
-                .replace("shear_distance = 0.001", "shear_distance = 0.003"))
+ROLLING_CELL = toml_text(**(TINY_PERIODIC_TABLES | {"case": TINY_PERIODIC_TABLES["case"] | {
+    "friction_ps": 0.5, "gradation": "poly", "box_length_d50": 20.0, "box_height_d50": 12.0,
+    "shear_distance": 0.003}}))
 
 
 @pytest.mark.liggghts

@@ -27,7 +27,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from conftest import need_binary  # noqa: E402
-from test_campaign_run import CAMPAIGN, _folders, _no_engine_left, _starts, _wait_for  # noqa: E402
+from campaign_files import write_toml  # noqa: E402
+from test_campaign_run import TABLES, _folders, _no_engine_left, _starts, _wait_for  # noqa: E402
 
 from interphase.campaign.run import campaign_status  # noqa: E402
 from interphase.campaign.runner import stale_engine_pids  # noqa: E402
@@ -38,11 +39,9 @@ pytestmark = pytest.mark.liggghts
 
 def _campaign(tmp_path: Path, seeds=(1, 2, 3), jobs: int = 1, name: str = "faults") -> Path:
     """Tiny real cases (test_campaign_run's): μs 0.2, one seed each, ~8 s of LIGGGHTS per case."""
-    text = (CAMPAIGN.replace('name = "resume"', f'name = "{name}"').replace("jobs = 2", f"jobs = {jobs}")
-            .replace("[0.05, 0.2, 0.5]", "[0.2]").replace("seed = [1, 2]", f"seed = {list(seeds)}"))
-    f = tmp_path / f"{name}.toml"
-    f.write_text(text)
-    return f
+    return write_toml(tmp_path / f"{name}.toml", **(TABLES | {
+        "campaign": TABLES["campaign"] | {"name": name}, "execution": {"jobs": jobs},
+        "sweep": {"friction_ps": [0.2], "seed": list(seeds)}}))
 
 
 def _start(toml: Path, env: dict | None = None, *args) -> tuple[subprocess.Popen, Path]:

@@ -2,8 +2,9 @@
 surface/, analysis/ and io/ import nothing from engines/, campaign/, report/ or cli; engines/ imports
 nothing from campaign/, report/ or cli; campaign/ imports nothing from report/, cli, cli_soils or api
 (the result format is the campaign's: campaign/results.py); and no two modules of src/interphase
-import each other, directly or round a circle. The checkers are shown to flag each kind of import
-they must see."""
+import each other, directly or round a circle; no function (or method) of src/interphase is longer
+than MAX_FUNCTION_LINES. The checkers are shown to flag each kind of import and function they must
+see."""
 
 from __future__ import annotations
 
@@ -198,3 +199,37 @@ def test_the_cycle_checker_passes_a_chain():
                                      "interphase.b": {"interphase.c"}, "interphase.c": {"interphase.version"},
                                      "interphase.version": set()}
     assert find_cycle(module_graph(sources)) is None
+
+
+# ---- no long function ------------------------------------------------------------------------
+#: the longest function (def line to last line, decorators not counted) a newcomer is asked to read
+MAX_FUNCTION_LINES = 80
+
+
+def long_functions(source: str, where: str, limit: int = MAX_FUNCTION_LINES) -> list[str]:
+    """`where:line name (n lines)` of every function or method of `source` longer than `limit`
+    lines, nested ones included."""
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            n = node.end_lineno - node.lineno + 1
+            if n > limit:
+                out.append(f"{where}:{node.lineno} {node.name} ({n} lines)")
+    return out
+
+
+def test_no_function_is_longer_than_the_limit():
+    bad = []
+    for path in _modules():
+        bad += long_functions(path.read_text(), str(path.relative_to(SRC.parent)))
+    assert not bad, f"functions over {MAX_FUNCTION_LINES} lines (split them):\n" + "\n".join(bad)
+
+
+def test_the_length_checker_names_a_long_function_and_method():
+    def body(n: int, indent: str) -> str:
+        return "".join(f"{indent}x{i} = {i}\n" for i in range(n))
+
+    # `edge` is exactly at the limit (its def and 79 lines), `long` one over it (its def and 80)
+    source = ("def short():\n    pass\n\n\nclass K:\n    async def long(self):\n" + body(80, " " * 8)
+              + "\n\ndef edge():\n" + body(79, " " * 4))
+    assert long_functions(source, "m.py") == ["m.py:6 long (81 lines)"]

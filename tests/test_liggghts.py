@@ -2,28 +2,25 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pandas as pd
 import pytest
 
-from interphase.case import Case
 from interphase.engines.base import EngineError
 from interphase.engines.liggghts import Liggghts
 from interphase.errors import InputError
 from interphase.surface.spec import ProfileSpec
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 from tests.conftest import need_binary
+from tests.engine_runs import TINY_GRAINS, cached_runner, tiny_case
 from tests.reader_contract import ReaderContract
 
 pytestmark = pytest.mark.liggghts
 
-TINY = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10,
-            shear_distance=2e-3, snapshot_every=0.5e-3)
-
-
-def tiny(test="interface", profile=("flat", {}), **kw) -> Case:
-    spec = None if test == "box" else ProfileSpec.make(profile[0], **profile[1])
-    return Case(test=test, profile=spec, **(TINY | kw))
+TINY = TINY_GRAINS | dict(shear_distance=2e-3, snapshot_every=0.5e-3)
+tiny = functools.partial(tiny_case, TINY)
 
 
 @pytest.fixture(scope="session")
@@ -34,17 +31,7 @@ def engine():
 
 @pytest.fixture(scope="session")
 def run(engine, tmp_path_factory):
-    cache = {}
-
-    def _run(case: Case):
-        key = case.canonical().__repr__()
-        if key not in cache:
-            folder = tmp_path_factory.mktemp("lig")
-            engine.write_input(case, folder)
-            engine.execute(folder)
-            cache[key] = (folder, engine.read_results(folder))
-        return cache[key]
-    return _run
+    return cached_runner(engine, tmp_path_factory, "lig")
 
 
 def steady_ratio(history, start=1.0e-3):

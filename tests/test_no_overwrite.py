@@ -13,22 +13,15 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from campaign_files import TINY_CASE, write_toml  # noqa: E402
 from conftest import need_binary  # noqa: E402
 
 from interphase.cli import main  # noqa: E402
 
 pytestmark = pytest.mark.liggghts
 
-CASE = """test = "interface"
-device = "periodic"
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 50e6
-shear_velocity = 0.01
-shear_distance = 0.0005
-snapshot_every = 0.00025
-box_length_d50 = 12
-box_height_d50 = 6
-"""
+#: the tiny real case in a periodic cell
+CASE = {"test": "interface", "device": "periodic", **TINY_CASE, "shear_velocity": 0.01}
 
 
 def _sums(folder: Path) -> dict[str, str]:
@@ -38,12 +31,9 @@ def _sums(folder: Path) -> dict[str, str]:
 
 def test_a_finished_folder_survives_every_command(tmp_path, capsys):
     need_binary("liggghts")
-    camp = tmp_path / "c.toml"
-    camp.write_text(f'[campaign]\nname = "c"\n[case]\n{CASE}[pairs]\nbox = false\n')
-    same = tmp_path / "same.toml"
-    same.write_text(f"[case]\n{CASE}")
-    other = tmp_path / "other.toml"
-    other.write_text(f"[case]\n{CASE}seed = 2\n")
+    camp = write_toml(tmp_path / "c.toml", campaign={"name": "c"}, case=CASE, pairs={"box": False})
+    same = write_toml(tmp_path / "same.toml", case=CASE)
+    other = write_toml(tmp_path / "other.toml", case=CASE | {"seed": 2})
     assert main(["run", str(camp), "--plain"]) == 0
     runs = tmp_path / "runs" / "c"
     (folder,) = [p for p in runs.iterdir() if (p / "DONE").exists()]

@@ -13,26 +13,16 @@ from interphase.campaign import schema
 from interphase.campaign.plan import iter_plan, plan
 from interphase.campaign.schema import load_campaign
 from interphase.cli import build_parser, main
+from tests.campaign_files import SAWTOOTH, write_toml
 
-CAMPAIGN = """[campaign]
-name = "c"
-[case]
-test = "interface"
-device = "periodic"
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_velocity = 0.02
-shear_modulus = 50e6
-shear_distance = 0.006
-box_height_d50 = 25
-[sweep]
-"""
+#: a periodic case of 6 mm shear, planned only (never run)
+CASE = {"test": "interface", "device": "periodic", "profile": SAWTOOTH, "shear_velocity": 0.02,
+        "shear_modulus": 50e6, "shear_distance": 0.006, "box_height_d50": 25}
 
 
-def _write(folder, sweep="seed = [1, 2]\n"):
+def _write(folder, sweep=None):
     folder.mkdir(parents=True, exist_ok=True)
-    f = folder / "c.toml"
-    f.write_text(CAMPAIGN + sweep)
-    return f
+    return write_toml(folder / "c.toml", campaign={"name": "c"}, case=CASE, sweep=sweep or {"seed": [1, 2]})
 
 
 def test_status_from_another_folder_reads_the_files_runs_folder(tmp_path, monkeypatch, capsys):
@@ -61,10 +51,9 @@ def test_status_from_another_folder_reads_the_files_runs_folder(tmp_path, monkey
 
 
 def test_a_huge_sweep_is_counted_first_and_needs_yes(tmp_path, capsys):
-    axis = ", ".join(str(i) for i in range(1, 101))
-    mu = ", ".join(f"{0.005 * i:.3f}" for i in range(1, 101))
-    rt = ", ".join(f"{0.01 * i:.2f}" for i in range(1, 101))
-    f = _write(tmp_path, f"profile.rt = [{rt}]\nfriction_ps = [{mu}]\nseed = [{axis}]\n")
+    rt = [float(f"{0.01 * i:.2f}") for i in range(1, 101)]
+    mu = [float(f"{0.005 * i:.3f}") for i in range(1, 101)]
+    f = _write(tmp_path, {"profile.rt": rt, "friction_ps": mu, "seed": list(range(1, 101))})
     t = time.perf_counter()
     assert main(["run", str(f), "--dry-run"]) == 0
     took = time.perf_counter() - t
@@ -85,7 +74,7 @@ def test_a_huge_sweep_is_counted_first_and_needs_yes(tmp_path, capsys):
 
 
 def test_lazy_planning_gives_the_eager_plans_ids(tmp_path, monkeypatch):
-    f = _write(tmp_path, "profile.rt = [0.5, 1, 2]\nfriction_ps = [0.2, 0.5]\nseed = [1, 2, 3]\n")
+    f = _write(tmp_path, {"profile.rt": [0.5, 1, 2], "friction_ps": [0.2, 0.5], "seed": [1, 2, 3]})
     eager = load_campaign(f)
     monkeypatch.setattr(schema, "EAGER_MAX", 5)
     lazy = load_campaign(f)

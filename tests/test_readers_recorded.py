@@ -45,14 +45,23 @@ def _dump_blocks(path: Path) -> list[np.ndarray]:
     return out
 
 
-class TestLiggghtsRecorded(ReaderContract):
+class _RecordedContract(ReaderContract):
+    """The reader contract on a recorded raw folder: `recorded` names the module fixture holding
+    (folder, Results); the folder's reference.json is the reference."""
+
+    recorded: str
+
     @pytest.fixture
-    def finished(self, liggghts_recorded):
-        return liggghts_recorded
+    def finished(self, request):
+        return request.getfixturevalue(self.recorded)
 
     @pytest.fixture
     def reference(self, finished):
         return json.loads((finished[0] / "reference.json").read_text())
+
+
+class TestLiggghtsRecorded(_RecordedContract):
+    recorded = "liggghts_recorded"
 
     def test_rows_and_forces_match_the_dumps(self, finished):
         """Pair rows: columns 10–12 are the force on grain i (body 1), the table holds the force on
@@ -77,14 +86,8 @@ class TestLiggghtsRecorded(ReaderContract):
         assert res.particles.groupby("snapshot").size().tolist() == counts
 
 
-class TestYadeRecorded(ReaderContract):
-    @pytest.fixture
-    def finished(self, yade_recorded):
-        return yade_recorded
-
-    @pytest.fixture
-    def reference(self, finished):
-        return json.loads((finished[0] / "reference.json").read_text())
+class TestYadeRecorded(_RecordedContract):
+    recorded = "yade_recorded"
 
     def test_rows_and_forces_match_the_csv(self, finished):
         """One table row per exported interaction (none merged in this run) and the force on id2 as

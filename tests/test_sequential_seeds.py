@@ -13,6 +13,7 @@ import pytest
 from scipy import stats
 
 sys.path.insert(0, str(Path(__file__).parent))
+from campaign_files import TINY_CASE, toml_text  # noqa: E402
 from conftest import need_binary  # noqa: E402
 
 from interphase.campaign.plan import plan  # noqa: E402
@@ -20,27 +21,12 @@ from interphase.campaign.schema import SeedRule, load_campaign  # noqa: E402
 from interphase.campaign.sequential import cap_notes, interface_key, replay, wanted_ids  # noqa: E402
 from interphase.cli import main  # noqa: E402
 
-BASE = """[campaign]
-name = "seq"
-engines = ["liggghts"]
-output = "out"
-
-[execution]
-jobs = 2
-
-[case]
-device = "periodic"
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 50e6
-shear_velocity = 0.02
-shear_distance = 0.0005
-snapshot_every = 0.00025
-box_length_d50 = 12.0
-box_height_d50 = 6.0
-
-[sweep]
-friction_ps = [0.05, 0.5]
-"""
+#: two physical cases (μs 0.05 and 0.5) of the tiny periodic case, sheared at 0.02 m/s
+BASE_TABLES = dict(campaign={"name": "seq", "engines": ["liggghts"], "output": "out"},
+                   execution={"jobs": 2},
+                   case={"device": "periodic", **TINY_CASE, "shear_velocity": 0.02},
+                   sweep={"friction_ps": [0.05, 0.5]})
+BASE = toml_text(**BASE_TABLES)
 SEEDS = '\n[seeds]\nstart = 3\nmax = {max}\ntarget = {{quantity = "E", halfwidth = {h}}}\n'
 
 # (what replaces the [seeds] table's text, line the message points at, what it must name)
@@ -71,7 +57,7 @@ def test_a_bad_seeds_table_exits_2_naming_file_line_and_field(name, tmp_path, ca
 
 def test_seeds_and_a_seed_sweep_is_an_error_naming_both(tmp_path, capsys):
     f = tmp_path / "both.toml"
-    f.write_text(BASE.replace("friction_ps = [0.05, 0.5]", "friction_ps = [0.05, 0.5]\nseed = [1, 2, 3]")
+    f.write_text(toml_text(**(BASE_TABLES | {"sweep": {"friction_ps": [0.05, 0.5], "seed": [1, 2, 3]}}))
                  + SEEDS.format(max=4, h=0.05))
     assert main(["run", str(f), "--dry-run"]) == 2
     err = capsys.readouterr().err

@@ -7,31 +7,26 @@ the 0.5–1 mm means are as far from their bounds as over 2 mm)."""
 
 from __future__ import annotations
 
+import functools
 import json
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from interphase.case import Case
 from interphase.engines.base import EngineError, EngineProfile, get_engine
 from interphase.engines.yade import Yade, classify, contact_parameters
 from interphase.material import Gradation
-from interphase.surface.spec import ProfileSpec
 from interphase.tables import CONTACT_COLUMNS, HISTORY_COLUMNS, PARTICLE_COLUMNS
 from tests.conftest import need_binary
+from tests.engine_runs import TINY_GRAINS, cached_runner, tiny_case
 from tests.reader_contract import ReaderContract
 
 pytestmark = pytest.mark.yade
 
-TINY = dict(shear_modulus=50e6, n_grains=200, box_length_d50=20, box_height_d50=10,
-            shear_distance=1e-3, snapshot_every=0.25e-3)
+TINY = TINY_GRAINS | dict(shear_distance=1e-3, snapshot_every=0.25e-3)
 SAW = ("sawtooth", dict(rt=1.0, sw=2.0, sr=0.0))
-
-
-def tiny(test="interface", profile=("flat", {}), **kw) -> Case:
-    spec = None if test == "box" else ProfileSpec.make(profile[0], **profile[1])
-    return Case(test=test, profile=spec, **(TINY | kw))
+tiny = functools.partial(tiny_case, TINY)
 
 
 @pytest.fixture(scope="session")
@@ -42,17 +37,7 @@ def yade_engine():
 
 @pytest.fixture(scope="session")
 def yrun(yade_engine, tmp_path_factory):
-    cache = {}
-
-    def _run(case: Case):
-        key = repr(case.canonical())
-        if key not in cache:
-            folder = tmp_path_factory.mktemp("yade")
-            yade_engine.write_input(case, folder)
-            yade_engine.execute(folder)
-            cache[key] = (folder, yade_engine.read_results(folder))
-        return cache[key]
-    return _run
+    return cached_runner(yade_engine, tmp_path_factory, "yade")
 
 
 def ratio(history) -> pd.Series:

@@ -14,10 +14,7 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--normal-stress", type=float, action="append", required=True, metavar="PA",
                    help="normal stress [Pa] (repeatable)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
-    p.add_argument("--runs", default=None, metavar="DIR", help="runs folder (default: runs/element/<card name>)")
-    p.add_argument("--executor", choices=("local", "slurm"), default=None)
-    p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    _run_options(p, runs="runs/element/<card name>")
     p.set_defaults(func=lambda a: _cmd_element(a, print_json))
 
     p = sub.add_parser("calibrate", help="calibrate grain parameters to a laboratory soil (GrainLearning: "
@@ -27,10 +24,7 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--quick", action="store_true", help="the smallest budget (tests, a first look)")
     p.add_argument("-o", "--output", default=None, metavar="CARD",
                    help="the soil card to write (default: soils/<target name>.toml)")
-    p.add_argument("--runs", default=None, metavar="DIR", help="runs folder (default: runs/calibrate/<target name>)")
-    p.add_argument("--executor", choices=("local", "slurm"), default=None)
-    p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    _run_options(p, runs="runs/calibrate/<target name>")
     p.set_defaults(func=lambda a: _cmd_calibrate(a, print_json))
 
     p = sub.add_parser("validate", help="the criterion (and, with --simulate, the DEM on the calibrated soil) "
@@ -44,10 +38,18 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N for --simulate (default 3)")
     p.add_argument("-o", "--output", default=None, metavar="DIR",
                    help="folder for the table, figure and runs (default: runs/validate/<lab file name>)")
+    _run_options(p)
+    p.set_defaults(func=lambda a: _cmd_validate(a, print_json))
+
+
+def _run_options(p, runs: str | None = None) -> None:
+    """The options every soil command that runs cases takes: where (--runs, when `runs` names its
+    default folder), how (--executor, --jobs) and how it prints (--json)."""
+    if runs is not None:
+        p.add_argument("--runs", default=None, metavar="DIR", help=f"runs folder (default: {runs})")
     p.add_argument("--executor", choices=("local", "slurm"), default=None)
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=lambda a: _cmd_validate(a, print_json))
 
 
 def _check_seeds(n: int) -> None:

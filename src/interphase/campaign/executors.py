@@ -196,85 +196,102 @@ class LocalExecutor:
 
     def _run_pool(self, tasks: list[Task], on_event: OnEvent, grace: float) -> list[Task]:
         """One pool over `tasks`; returns the tasks to run again in a new pool (its pool broke)."""
-        from concurrent.futures.process import BrokenProcessPool
-
         ctx = mp.get_context("spawn")   # no fork of a process that runs a display thread
         events = ctx.Queue()
-        workers: dict[str, int] = {}
-        again: list[Task] = []
         with ProcessPoolExecutor(max_workers=min(self.jobs, len(tasks)), mp_context=ctx,
                                  initializer=_worker_init, initargs=(events, os.getpid())) as pool:
             futures = {pool.submit(_local_task, t.case, t.engine, str(t.folder), t.meta): t for t in tasks}
+            rnd = _PoolRound(futures, events, on_event)
             pending = set(futures)
-
-            def drain():
-                while True:
-                    try:
-                        kind, cid, info = events.get_nowait()
-                    except Exception:   # queue.Empty (and a closed queue at shutdown)
-                        return
-                    workers[cid] = info.get("pid")
-                    on_event(kind, cid, info)
-
-            def finish(fut):
-                t = futures[fut]
-                try:
-                    res = fut.result()
-                except (KeyboardInterrupt, Interrupted):
-                    raise            # the campaign's own interruption, not this case's failure
-                except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
-                    res = lost_result(t, exc, workers.get(t.case_id))
-                    if isinstance(exc, BrokenProcessPool) and res.get("cause") != "worker_died" and \
-                            res.get("status") in ("pending", "interrupted"):
-                        # stopped by the broken pool, not by its own fault: a new pool runs it
-                        workers.pop(t.case_id, None)
-                        again.append(t)
-                        return
-                workers.pop(t.case_id, None)
-                on_event("finished", t.case_id, res)
-
             try:
                 while pending:
                     done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-                    drain()
+                    rnd.drain()
                     for fut in done:
-                        finish(fut)
+                        rnd.finish(fut)
             except (KeyboardInterrupt, Interrupted):
-                for fut in pending:
-                    fut.cancel()
-                signalled: set[str] = set()
-
-                def stop_started():
-                    # the pool hands a worker its next task before the parent can cancel it (a
-                    # queued call), so a case may start after the interruption: stop it as well
-                    drain()
-                    for cid, pid in list(workers.items()):
-                        if cid not in signalled:
-                            signalled.add(cid)
-                            try:
-                                os.kill(pid, signal.SIGINT)
-                            except (ProcessLookupError, TypeError):
-                                pass
-
-                stop_started()
-                running = {f for f in pending if not f.cancelled()}
-                deadline = time.monotonic() + grace
-                while running and time.monotonic() < deadline:
-                    done, running = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
-                    stop_started()
-                    for fut in done:
-                        finish(fut)
-                for fut in running:   # did not stop within the grace period
-                    t = futures[fut]
-                    record_interrupted(t.folder, "stopped: did not end within the grace period")
-                    on_event("finished", t.case_id, interrupted_result(t.case_id))
-                for fut in pending:
-                    if fut.cancelled():
-                        on_event("finished", futures[fut].case_id, {"case_id": futures[fut].case_id,
-                                                                     "status": "pending", "skipped": True})
+                rnd.stop(pending, grace)
                 pool.shutdown(wait=False, cancel_futures=True)
                 raise
-        return again
+        return rnd.again
+
+
+class _PoolRound:
+    """The bookkeeping of one pool's run: which worker (pid) runs which case, the events the workers
+    send, each finished future reported once, the cases a broken pool stopped (`again`)."""
+
+    def __init__(self, futures: dict, events, on_event: OnEvent):
+        self.futures = futures          # future → Task
+        self.events = events            # the workers' queue of (kind, case_id, info)
+        self.on_event = on_event
+        self.workers: dict[str, int] = {}   # case_id → pid of the worker running it
+        self.again: list[Task] = []
+        self.signalled: set[str] = set()
+
+    def drain(self) -> None:
+        """Pass on the workers' queued events, noting which worker runs which case."""
+        while True:
+            try:
+                kind, cid, info = self.events.get_nowait()
+            except Exception:   # queue.Empty (and a closed queue at shutdown)
+                return
+            self.workers[cid] = info.get("pid")
+            self.on_event(kind, cid, info)
+
+    def finish(self, fut) -> None:
+        """Report a done future's case; one the broken pool stopped goes to `again` instead."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        t = self.futures[fut]
+        try:
+            res = fut.result()
+        except (KeyboardInterrupt, Interrupted):
+            raise            # the campaign's own interruption, not this case's failure
+        except BaseException as exc:  # a worker died (BrokenProcessPool) or a bug outside run_case
+            res = lost_result(t, exc, self.workers.get(t.case_id))
+            if isinstance(exc, BrokenProcessPool) and res.get("cause") != "worker_died" and \
+                    res.get("status") in ("pending", "interrupted"):
+                # stopped by the broken pool, not by its own fault: a new pool runs it
+                self.workers.pop(t.case_id, None)
+                self.again.append(t)
+                return
+        self.workers.pop(t.case_id, None)
+        self.on_event("finished", t.case_id, res)
+
+    def stop_started(self) -> None:
+        """SIGINT to every worker running a case, once each."""
+        # the pool hands a worker its next task before the parent can cancel it (a queued call), so
+        # a case may start after the interruption: stop it as well
+        self.drain()
+        for cid, pid in list(self.workers.items()):
+            if cid not in self.signalled:
+                self.signalled.add(cid)
+                try:
+                    os.kill(pid, signal.SIGINT)
+                except (ProcessLookupError, TypeError):
+                    pass
+
+    def stop(self, pending: set, grace: float) -> None:
+        """On interruption: cancel what has not started, stop what runs, wait `grace` [s] for it,
+        and record every case that did not end by itself (interrupted, or pending when never run)."""
+        for fut in pending:
+            fut.cancel()
+        self.stop_started()
+        running = {f for f in pending if not f.cancelled()}
+        deadline = time.monotonic() + grace
+        while running and time.monotonic() < deadline:
+            done, running = wait(running, timeout=0.2, return_when=FIRST_COMPLETED)
+            self.stop_started()
+            for fut in done:
+                self.finish(fut)
+        for fut in running:   # did not stop within the grace period
+            t = self.futures[fut]
+            record_interrupted(t.folder, "stopped: did not end within the grace period")
+            self.on_event("finished", t.case_id, interrupted_result(t.case_id))
+        for fut in pending:
+            if fut.cancelled():
+                case_id = self.futures[fut].case_id
+                self.on_event("finished", case_id, {"case_id": case_id, "status": "pending", "skipped": True})
 
 
 # ---- slurm ----------------------------------------------------------------------------------

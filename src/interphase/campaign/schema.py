@@ -258,6 +258,36 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     `output` overrides the runs folder (else [campaign].output relative to the file, else runs/<name>
     beside the file; never the current directory). `Campaign.output_from` says which."""
     path = Path(path)
+    ctx, data = _read_toml(path)
+    meta = data.get("campaign", {})
+    name, description = _name_and_description(ctx, meta, path)
+    engines = _engines(ctx, meta)
+    specimen_from = _specimen_from(ctx, meta, engines)
+    base_dir = path.parent.resolve()
+    out, output_from = _resolve_output(ctx, meta, name, path, output)
+    execution = _execution(ctx, data.get("execution", {}))
+
+    groups_raw = data.get("group")
+    top_case = data.get("case", {})
+    groups_spec = _group_specs(ctx, data, name, description)
+    _check_case_keys(ctx, top_case, ("case",))
+    seed_rule, groups_spec = _with_seed_rule(ctx, data, groups_raw, groups_spec)
+    groups, gens = _groups_and_factors(ctx, top_case, groups_spec, base_dir)
+    size = sum(math.prod(len(f) for f in factors) for _, _, factors, _ in gens)
+    pairs = data.get("pairs", {})
+    stated = set(top_case) | {k for g in groups_spec for k in g[2]} | {v.split(".")[0] for g in groups for v in g.variables}
+    lazy = size > EAGER_MAX
+    cases, checked = _load_cases(ctx, gens, base_dir, pairs, lazy)
+    return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines,
+                    groups=tuple(groups), cases=cases, size=size, lazy=lazy,
+                    output=Path(os.path.abspath(out)), output_from=output_from, execution=execution,
+                    description=description, specimen_from=specimen_from, seeds=seed_rule,
+                    _spec=_Spec(ctx, tuple(gens), base_dir, pairs, tuple(c.case for c in checked)))
+
+
+def _read_toml(path: Path) -> tuple[_Ctx, dict]:
+    """(located context, parsed tables) of a campaign file; the top-level keys and their table
+    types checked. An unreadable file or a TOML syntax error is an InputError naming the line."""
     try:
         raw = path.read_bytes()
     except OSError as exc:
@@ -274,10 +304,14 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
                          fix="see https://toml.io (strings need quotes, tables [name], lists [a, b])") from None
     _check_keys(ctx, data, TOP_KEYS, ())
     for key in ("campaign", "execution", "case", "sweep", "zip", "pairs", "seeds"):
+        # [zip] may be one table or an array of them; every other key is one table
         if key in data and not isinstance(data[key], (dict, list) if key == "zip" else dict):
             raise ctx.error((key,), f"must be a table [{key}], got {_type_name(data[key])}")
+    return ctx, data
 
-    meta = data.get("campaign", {})
+
+def _name_and_description(ctx: _Ctx, meta: dict, path: Path) -> tuple[str, str]:
+    """[campaign] name (folder-safe; default: the file's stem) and description, keys checked."""
     _check_keys(ctx, meta, CAMPAIGN_KEYS, ("campaign",))
     name = meta.get("name", path.stem)
     if not isinstance(name, str) or not NAME_RE.match(name):
@@ -286,42 +320,43 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     description = meta.get("description", "")
     if not isinstance(description, str):
         raise ctx.error(("campaign", "description"), f"must be a string, got {_type_name(description)}")
-    engines = _engines(ctx, meta)
-    specimen_from = _specimen_from(ctx, meta, engines)
-    base_dir = path.parent.resolve()
-    out, output_from = _resolve_output(ctx, meta, name, path, output)
-    execution = _execution(ctx, data.get("execution", {}))
+    return name, description
 
+
+def _group_specs(ctx: _Ctx, data: dict, name: str, description: str) -> list[tuple]:
+    """(name, description, case overrides, sweep, zips, TOML path) per group. Without [[group]] the
+    file is one group named after the campaign; with it, top-level [sweep]/[zip] apply to every group."""
     groups_raw = data.get("group")
-    top_case = data.get("case", {})
     if groups_raw is None:
-        groups_spec = [(name, description, {}, data.get("sweep", {}), _as_list(data.get("zip", [])), ())]
-    else:
-        if not isinstance(groups_raw, list) or not all(isinstance(g, dict) for g in groups_raw):
-            raise ctx.error(("group",), "must be an array of tables [[group]]")
-        if not groups_raw:
-            raise ctx.error(("group",), "is empty", "add [[group]] tables or remove the key")
-        groups_spec = []
-        for gi, g in enumerate(groups_raw):
-            gp = ("group", gi)
-            _check_keys(ctx, g, GROUP_KEYS, gp)
-            gname = g.get("name", str(gi + 1))
-            if not isinstance(gname, str) or not NAME_RE.match(gname):
-                raise ctx.error(gp + ("name",), f"group name must be a short string, got {gname!r}")
-            gcase = g.get("case", {})
-            if not isinstance(gcase, dict):
-                raise ctx.error(gp + ("case",), "must be a table of Case fields")
-            # a top-level [sweep]/[zip] applies to every group, before the group's own
-            sweep = {**data.get("sweep", {}), **g.get("sweep", {})}
-            zips = _as_list(data.get("zip", [])) + _as_list(g.get("zip", []))
-            groups_spec.append((gname, g.get("description", ""), gcase, sweep, zips, gp))
-        names = [g[0] for g in groups_spec]
-        dup = {n for n in names if names.count(n) > 1}
-        if dup:
-            raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
+        return [(name, description, {}, data.get("sweep", {}), _as_list(data.get("zip", [])), ())]
+    if not isinstance(groups_raw, list) or not all(isinstance(g, dict) for g in groups_raw):
+        raise ctx.error(("group",), "must be an array of tables [[group]]")
+    if not groups_raw:
+        raise ctx.error(("group",), "is empty", "add [[group]] tables or remove the key")
+    groups_spec = []
+    for gi, g in enumerate(groups_raw):
+        gp = ("group", gi)
+        _check_keys(ctx, g, GROUP_KEYS, gp)
+        gname = g.get("name", str(gi + 1))
+        if not isinstance(gname, str) or not NAME_RE.match(gname):
+            raise ctx.error(gp + ("name",), f"group name must be a short string, got {gname!r}")
+        gcase = g.get("case", {})
+        if not isinstance(gcase, dict):
+            raise ctx.error(gp + ("case",), "must be a table of Case fields")
+        # a top-level [sweep]/[zip] applies to every group, before the group's own
+        sweep = {**data.get("sweep", {}), **g.get("sweep", {})}
+        zips = _as_list(data.get("zip", [])) + _as_list(g.get("zip", []))
+        groups_spec.append((gname, g.get("description", ""), gcase, sweep, zips, gp))
+    names = [g[0] for g in groups_spec]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise ctx.error(("group",), f"group name {sorted(dup)[0]!r} is used twice", "give every group its own name")
+    return groups_spec
 
-    _check_case_keys(ctx, top_case, ("case",))
-    seed_rule, groups_spec = _with_seed_rule(ctx, data, groups_raw, groups_spec)
+
+def _groups_and_factors(ctx: _Ctx, top_case: dict, groups_spec: list, base_dir: Path) -> tuple[list, list]:
+    """(Groups, generators): per group its merged base case (with its soil card's fields) and the
+    factors of its product, (group name, base case dict, factors, TOML path)."""
     groups: list[Group] = []
     gens: list[tuple] = []
     for gname, gdesc, gcase, sweep, zips, gpath in groups_spec:
@@ -333,25 +368,21 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
             base = _with_soil(ctx, base, base_dir, where, variables)
         groups.append(Group(gname, tuple(variables), gdesc if isinstance(gdesc, str) else ""))
         gens.append((gname, base, factors, gpath))
-    size = sum(math.prod(len(f) for f in factors) for _, _, factors, _ in gens)
-    pairs = data.get("pairs", {})
-    stated = set(top_case) | {k for g in groups_spec for k in g[2]} | {v.split(".")[0] for g in groups for v in g.variables}
-    lazy = size > EAGER_MAX
+    return groups, gens
+
+
+def _load_cases(ctx: _Ctx, gens: list, base_dir: Path, pairs: dict, lazy: bool) -> tuple[tuple, list]:
+    """(the campaign's cases with their box tests, the cases built to check them). A lazy campaign
+    keeps no cases: it checks one case per swept value instead."""
     if lazy:
         # every swept value is built once, with the other factors at their first value: a bad value
         # is refused now, at load, without building the product (combinations are built as planned)
         checked = [c for c in _value_cases(ctx, gens, base_dir)]
         _pair_options(ctx, pairs, any(c.role == "interface" for c in checked))
-        cases: tuple = ()
-    else:
-        seen: dict[str, tuple] = {}
-        cases = tuple(_add_pairs(ctx, pairs, list(_iter_group_cases(ctx, gens, base_dir, seen)), seen))
-        checked = [c for c in cases]
-    return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines,
-                    groups=tuple(groups), cases=cases, size=size, lazy=lazy,
-                    output=Path(os.path.abspath(out)), output_from=output_from, execution=execution,
-                    description=description, specimen_from=specimen_from, seeds=seed_rule,
-                    _spec=_Spec(ctx, tuple(gens), base_dir, pairs, tuple(c.case for c in checked)))
+        return (), checked
+    seen: dict[str, tuple] = {}
+    cases = tuple(_add_pairs(ctx, pairs, list(_iter_group_cases(ctx, gens, base_dir, seen)), seen))
+    return cases, [c for c in cases]
 
 
 def _seed_rule(ctx: _Ctx, table: dict, pairs: dict) -> SeedRule:

@@ -121,6 +121,9 @@ def _images(x: np.ndarray, reach: np.ndarray, period: float, x0: float, x1: floa
     return np.concatenate(out_i), np.concatenate(out_s)
 
 
+_MM = 1e3                       # m → mm: the picture's unit
+
+
 def draw_network_on(ax, contacts: pd.DataFrame, snapshot, *, particles: pd.DataFrame | None = None,
                     case=None, profile=None, window: tuple[float, float] | None = None,
                     period: float | None = None, max_width: float | None = None, legend: bool = True,
@@ -128,21 +131,14 @@ def draw_network_on(ax, contacts: pd.DataFrame, snapshot, *, particles: pd.DataF
     """Draw the network of `snapshot` on `ax` (mm). `case` gives the surface at the snapshot, the
     window, the periodic cell and the side walls; `profile` (a Profile or an (x, z) pair [m], drawn
     as given) and `window`/`period` [m] override it. Returns {gid: artist}."""
-    from matplotlib.collections import EllipseCollection, LineCollection
     from matplotlib.lines import Line2D
 
     c = _snapshot(contacts, snapshot)
     shear = float(c["shear_disp"].iloc[0]) if "shear_disp" in c else 0.0
-    kinds = c["kind"].astype(str).to_numpy()
     seg = np.stack([c[["x1", "z1"]].to_numpy(float), c[["x2", "z2"]].to_numpy(float)], axis=1)   # m
     fn = np.abs(c["fn"].to_numpy(float))
     fmax = float(fn.max()) if fn.size and fn.max() > 0 else 1.0
-    grains = None
-    if particles is not None:
-        require_columns(particles, _PART, "Particles")
-        grains = particles[particles["snapshot"].to_numpy() == snapshot]
-        if grains.empty:
-            grains = None
+    grains = _snapshot_grains(particles, snapshot)
     if case is not None:
         window = window if window is not None else case.window
         if period is None and case.periodic:
@@ -150,97 +146,32 @@ def draw_network_on(ax, contacts: pd.DataFrame, snapshot, *, particles: pd.DataF
     box_l = case.box_length if case is not None else None
     d = float(np.median(2 * grains["radius"])) if grains is not None else (case.d50 if case is not None else
                                                                             float(np.median(np.hypot(*(seg[:, 1] - seg[:, 0]).T))))
-    # view: the cell (periodic) or the box with a grain's margin, else the data
-    if period:
-        x0, x1 = -0.6 * d, period + 0.6 * d
-    elif box_l is not None:
-        x0, x1 = -1.0 * d, box_l + 1.0 * d
-    else:
-        xs = seg[:, :, 0] if grains is None else np.concatenate([seg[:, :, 0].ravel(), grains["x"].to_numpy(float)])
-        x0, x1 = float(np.min(xs)) - 0.5 * d, float(np.max(xs)) + 0.5 * d
-    top = max(float(seg[:, :, 1].max()),
-              float((grains["z"] + grains["radius"]).max()) if grains is not None else -np.inf) + 0.3 * d
+    x0, x1 = _x_view(seg, grains, d, period, box_l)
     surf = surface_at(case, shear, x0, x1) if profile is None else (
         (np.asarray(profile.x, float), np.asarray(profile.z, float)) if hasattr(profile, "x")
         else tuple(np.asarray(p, float) for p in profile))
-    bottom_data = float(seg[:, :, 1].min())
-    if grains is not None:
-        bottom_data = min(bottom_data, float((grains["z"] - grains["radius"]).min()))
-    if surf is not None:
-        bottom_data = min(bottom_data, float(np.min(surf[1])))
-    bottom = bottom_data - 0.8 * d
+    bottom, top = _z_view(seg, grains, surf, d)
 
-    mm = 1e3
-    ax.set_xlim(x0 * mm, x1 * mm)
-    ax.set_ylim(bottom * mm, top * mm)
+    ax.set_xlim(x0 * _MM, x1 * _MM)
+    ax.set_ylim(bottom * _MM, top * _MM)
     ax.set_aspect("equal")
     art: dict = {}
     if max_width is None:           # about half a grain wide, in points, at the axes' scale
         fig = ax.figure
         w_in = fig.get_size_inches()[0] * ax.get_position().width
-        max_width = float(np.clip(0.45 * d * mm * 72.0 * w_in / ((x1 - x0) * mm), 1.0, 8.0))
-    # surface: filled below, the profile line on top
+        max_width = float(np.clip(0.45 * d * _MM * 72.0 * w_in / ((x1 - x0) * _MM), 1.0, 8.0))
     if surf is not None:
-        sx, sz = surf[0] * mm, surf[1] * mm
-        art["surface-fill"] = ax.fill_between(sx, sz, bottom * mm, color=SURFACE_FACE, lw=0, zorder=1,
-                                              gid="surface-fill")
-        (art["surface"],) = ax.plot(sx, sz, color=SURFACE_EDGE, lw=1.0, zorder=4, gid="surface", label="surface")
-    # grains to scale
+        _draw_surface(ax, art, surf, bottom)
     if grains is not None:
-        gx, gz, gr = (grains[k].to_numpy(float) for k in ("x", "z", "radius"))
-        coll = EllipseCollection(2 * gr * mm, 2 * gr * mm, np.zeros(gr.size), units="xy",
-                                 offsets=np.column_stack([gx, gz]) * mm, offset_transform=ax.transData,
-                                 facecolors=GRAIN_FACE, edgecolors=GRAIN_EDGE,
-                                 linewidths=0.4 if smooth_grains else 0.3, antialiaseds=smooth_grains, zorder=2)
-        coll.set_gid("grains")
-        art["grains"] = ax.add_collection(coll)
-        if period:
-            i, s = _images(gx, gr, period, x0, x1)
-            if i.size:
-                im = EllipseCollection(2 * gr[i] * mm, 2 * gr[i] * mm, np.zeros(i.size), units="xy",
-                                       offsets=np.column_stack([gx[i] + s, gz[i]]) * mm, offset_transform=ax.transData,
-                                       facecolors=GRAIN_FACE, edgecolors=GRAIN_EDGE, linewidths=0.4 if smooth_grains else 0.3,
-                                       antialiaseds=smooth_grains, alpha=0.45,
-                                       zorder=2)
-                im.set_gid("grain-images")
-                art["grain-images"] = ax.add_collection(im)
-    # force chains
-    handles = []
-    for kind, colour in COLOURS.items():
-        sel = kinds == kind
-        if not sel.any():
-            continue
-        lw = max_width * fn[sel] / fmax
-        lc = LineCollection(seg[sel] * mm, linewidths=lw, colors=colour, capstyle="round",
-                            zorder=5 if kind == "ps" else 3, gid=f"chains-{kind}")
-        art[f"chains-{kind}"] = ax.add_collection(lc)
-        handles.append(Line2D([], [], color=colour, lw=2, label={"pp": "grain–grain", "ps": "grain–surface",
-                                                                 "pw": "grain–wall/platen"}[kind] + f" ({int(sel.sum())})"))
-        if period:
-            mid = seg[sel].mean(axis=1)[:, 0]
-            half = np.abs(seg[sel][:, 1, 0] - seg[sel][:, 0, 0]) / 2
-            i, s = _images(mid, half, period, x0, x1)
-            if i.size:
-                segs = seg[sel][i].copy()
-                segs[:, :, 0] += s[:, None]
-                li = LineCollection(segs * mm, linewidths=lw[i], colors=colour, capstyle="round", alpha=0.5,
-                                    zorder=5 if kind == "ps" else 3, gid=f"chains-{kind}-images")
-                art[f"chains-{kind}-images"] = ax.add_collection(li)
-    # window and walls
+        _draw_grains(ax, art, grains, period, (x0, x1), smooth_grains)
+    lw = max_width * fn / fmax        # [pt], ∝ |fn|
+    handles = _draw_chains(ax, art, seg, c["kind"].astype(str).to_numpy(), lw, period, (x0, x1))
     if window is not None:
-        w0, w1 = window
-        lines = [ax.axvline(w * mm, color="tab:green", ls="--", lw=1.0, zorder=6) for w in (w0, w1)]
-        for ln in lines:
-            ln.set_gid("window")
-        art["window"] = lines
+        _draw_window(ax, art, window, period, (x0, x1))
         handles.append(Line2D([], [], color="tab:green", ls="--", lw=1.0,
                               label="periodic cell = window" if period else "measuring window"))
-        if not period:
-            for a, b in ((x0, w0), (w1, x1)):
-                if b > a:
-                    ax.axvspan(a * mm, b * mm, color="0.5", alpha=0.12, lw=0, zorder=0.5)
     if box_l is not None and not period:
-        art["walls"] = [ax.axvline(w * mm, color="0.2", lw=2.5, zorder=6, gid="walls") for w in (0.0, box_l)]
+        art["walls"] = [ax.axvline(w * _MM, color="0.2", lw=2.5, zorder=6, gid="walls") for w in (0.0, box_l)]
     art["max_width"], art["fmax"], art["shear_disp"] = max_width, fmax, shear
     if legend:
         ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=len(handles), fontsize=7,
@@ -248,6 +179,115 @@ def draw_network_on(ax, contacts: pd.DataFrame, snapshot, *, particles: pd.DataF
     ax.set_xlabel("x [mm] (soil moves +x relative to the surface)")
     ax.set_ylabel("z [mm]")
     return art
+
+
+def _snapshot_grains(particles: pd.DataFrame | None, snapshot) -> pd.DataFrame | None:
+    """The Particles rows of `snapshot` (x, z, radius [m]), or None when there are none."""
+    if particles is None:
+        return None
+    require_columns(particles, _PART, "Particles")
+    grains = particles[particles["snapshot"].to_numpy() == snapshot]
+    return None if grains.empty else grains
+
+
+def _x_view(seg: np.ndarray, grains, d: float, period: float | None, box_l: float | None) -> tuple[float, float]:
+    """(x0, x1) [m] shown: the periodic cell or the walled box with a grain's margin (`d` [m]),
+    else the data's extent."""
+    if period:
+        return -0.6 * d, period + 0.6 * d
+    if box_l is not None:
+        return -1.0 * d, box_l + 1.0 * d
+    xs = seg[:, :, 0] if grains is None else np.concatenate([seg[:, :, 0].ravel(), grains["x"].to_numpy(float)])
+    return float(np.min(xs)) - 0.5 * d, float(np.max(xs)) + 0.5 * d
+
+
+def _z_view(seg: np.ndarray, grains, surf, d: float) -> tuple[float, float]:
+    """(bottom, top) [m] shown: contacts, grains and surface, with margins in grain diameters `d` [m]
+    (more below, where the surface is filled)."""
+    top = max(float(seg[:, :, 1].max()),
+              float((grains["z"] + grains["radius"]).max()) if grains is not None else -np.inf) + 0.3 * d
+    bottom_data = float(seg[:, :, 1].min())
+    if grains is not None:
+        bottom_data = min(bottom_data, float((grains["z"] - grains["radius"]).min()))
+    if surf is not None:
+        bottom_data = min(bottom_data, float(np.min(surf[1])))
+    return bottom_data - 0.8 * d, top
+
+
+def _draw_surface(ax, art: dict, surf, bottom: float) -> None:
+    """The surface (x, z) [m]: filled down to `bottom` [m], the profile line on top."""
+    sx, sz = surf[0] * _MM, surf[1] * _MM
+    art["surface-fill"] = ax.fill_between(sx, sz, bottom * _MM, color=SURFACE_FACE, lw=0, zorder=1,
+                                          gid="surface-fill")
+    (art["surface"],) = ax.plot(sx, sz, color=SURFACE_EDGE, lw=1.0, zorder=4, gid="surface", label="surface")
+
+
+def _grain_circles(ax, x, z, r, smooth: bool, **style):
+    """Circles of radius r [m] at (x, z) [m], to scale in the axes' data units (mm)."""
+    from matplotlib.collections import EllipseCollection
+
+    return EllipseCollection(2 * r * _MM, 2 * r * _MM, np.zeros(r.size), units="xy",
+                             offsets=np.column_stack([x, z]) * _MM, offset_transform=ax.transData,
+                             facecolors=GRAIN_FACE, edgecolors=GRAIN_EDGE,
+                             linewidths=0.4 if smooth else 0.3, antialiaseds=smooth, zorder=2, **style)
+
+
+def _draw_grains(ax, art: dict, grains: pd.DataFrame, period: float | None, xview, smooth: bool) -> None:
+    """The grains to scale; in a periodic cell their images across x = 0 and L, fainter."""
+    gx, gz, gr = (grains[k].to_numpy(float) for k in ("x", "z", "radius"))
+    coll = _grain_circles(ax, gx, gz, gr, smooth)
+    coll.set_gid("grains")
+    art["grains"] = ax.add_collection(coll)
+    if period:
+        i, s = _images(gx, gr, period, *xview)
+        if i.size:
+            im = _grain_circles(ax, gx[i] + s, gz[i], gr[i], smooth, alpha=0.45)
+            im.set_gid("grain-images")
+            art["grain-images"] = ax.add_collection(im)
+
+
+def _draw_chains(ax, art: dict, seg: np.ndarray, kinds: np.ndarray, lw: np.ndarray, period: float | None,
+                 xview) -> list:
+    """The contacts as segments [m], width `lw` [pt] per contact, coloured by kind; in a periodic
+    cell the images of those crossing x = 0 or L, fainter. Returns the legend handles."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    handles = []
+    for kind, colour in COLOURS.items():
+        sel = kinds == kind
+        if not sel.any():
+            continue
+        lc = LineCollection(seg[sel] * _MM, linewidths=lw[sel], colors=colour, capstyle="round",
+                            zorder=5 if kind == "ps" else 3, gid=f"chains-{kind}")
+        art[f"chains-{kind}"] = ax.add_collection(lc)
+        handles.append(Line2D([], [], color=colour, lw=2, label={"pp": "grain–grain", "ps": "grain–surface",
+                                                                 "pw": "grain–wall/platen"}[kind] + f" ({int(sel.sum())})"))
+        if period:
+            mid = seg[sel].mean(axis=1)[:, 0]
+            half = np.abs(seg[sel][:, 1, 0] - seg[sel][:, 0, 0]) / 2
+            i, s = _images(mid, half, period, *xview)
+            if i.size:
+                segs = seg[sel][i].copy()
+                segs[:, :, 0] += s[:, None]
+                li = LineCollection(segs * _MM, linewidths=lw[sel][i], colors=colour, capstyle="round", alpha=0.5,
+                                    zorder=5 if kind == "ps" else 3, gid=f"chains-{kind}-images")
+                art[f"chains-{kind}-images"] = ax.add_collection(li)
+    return handles
+
+
+def _draw_window(ax, art: dict, window: tuple[float, float], period: float | None, xview) -> None:
+    """The measuring window's edges [m], dashed; outside it (walled box only) a grey shade."""
+    w0, w1 = window
+    lines = [ax.axvline(w * _MM, color="tab:green", ls="--", lw=1.0, zorder=6) for w in (w0, w1)]
+    for ln in lines:
+        ln.set_gid("window")
+    art["window"] = lines
+    if not period:
+        x0, x1 = xview
+        for a, b in ((x0, w0), (w1, x1)):
+            if b > a:
+                ax.axvspan(a * _MM, b * _MM, color="0.5", alpha=0.12, lw=0, zorder=0.5)
 
 
 def _fig_size(x_span: float, z_span: float, width: float = 10.0) -> tuple[float, float]:
