@@ -96,41 +96,19 @@ def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
     assert "0 to run" in again.stdout, again.stdout
 
 
-SEQUENTIAL = """
-[campaign]
-name = "slurm-seq"
-engines = ["liggghts"]
-output = "out"
-
-[execution]
-executor = "slurm"
-time_limit = 5            # one time-limit bucket: one array per round
-max_concurrent = 2
-
-[case]
-device = "periodic"
-profile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}
-shear_modulus = 50e6
-shear_velocity = 0.02
-shear_distance = 0.0005
-snapshot_every = 0.00025
-box_length_d50 = 12.0
-box_height_d50 = 6.0
-friction_ps = 0.5
-
-[seeds]
-start = 3
-max = 4
-target = {quantity = "E", halfwidth = 1e-9}   # out of reach: the case goes on to the cap
-"""
+SEQUENTIAL = dict(
+    campaign={"name": "slurm-seq", "engines": ["liggghts"], "output": "out"},
+    execution={"executor": "slurm", "time_limit": 5, "max_concurrent": 2},   # one time-limit bucket
+    case={**TINY_CASE, "device": "periodic", "shear_velocity": 0.02, "friction_ps": 0.5},
+    # a target out of reach: the case goes on to the cap
+    seeds={"start": 3, "max": 4, "target": {"quantity": "E", "halfwidth": 1e-9}})
 
 
 def test_sequential_rounds_run_as_one_slurm_array_each(slurm, tmp_path):
     """Sequential seeds on the real slurmctld: round 1 (seeds 1–3 of the interface case and their
     soil tests) is one job array, round 2 (seed 4 and its soil test, the target being out of reach)
     a second one; every run finished through SLURM, each under its round's array."""
-    camp = tmp_path / "seq.toml"
-    camp.write_text(SEQUENTIAL)
+    camp = write_toml(tmp_path / "seq.toml", **SEQUENTIAL)
     env = slurm.env()
     run = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
                          env=env, capture_output=True, text=True, timeout=400)
