@@ -22,6 +22,7 @@ from pathlib import Path
 
 from interphase.campaign.runner import run_case
 from interphase.case import Case
+from interphase.engines.base import engine_spec
 from interphase.engines.device import device
 from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
@@ -50,7 +51,7 @@ def main(sizes, shear: float = SHEAR, velocity: float = VELOCITY):
             case = case_of(length, depth, height, shear, velocity)
             n = device(case).n_grains
             t0 = time.perf_counter()
-            out = run_case(case, "liggghts", Path(tmp, f"c{length}x{depth}x{height}"))
+            out = run_case(case, engine_spec("liggghts"), Path(tmp, f"c{length}x{depth}x{height}"))
             wall = time.perf_counter() - t0
             assert out["status"] == "done", out
             folder = Path(tmp, f"c{length}x{depth}x{height}")

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from interphase.campaign.plan import engine_identity, plan
+from interphase.campaign.plan import plan
 from interphase.campaign.run import run_campaign
 from interphase.campaign.runner import run_case
 from interphase.campaign.schema import load_campaign
@@ -76,7 +76,6 @@ def bench_planning(tmp: Path) -> dict:
     rts = ", ".join(f"{0.1 + 0.2 * i:.1f}" for i in range(25))
     seeds = ", ".join(str(i) for i in range(1, 101))
     f.write_text(BIG % (rts, seeds))
-    engine_identity("liggghts")          # the engine's recipe id once, outside the timing like any cache
     t0 = time.perf_counter()
     camp = load_campaign(f, output=tmp / "big-out")
     t1 = time.perf_counter()
@@ -133,7 +132,7 @@ def bench_runner_standin(tmp: Path, n: int = 200) -> dict:
     eng = StandIn()
     t = time.perf_counter()
     for i in range(n):
-        run_case(case, "standin", tmp / "standin-out" / f"c{i}", {"case_id": f"c{i}"}, engine=eng)
+        run_case(case, eng, tmp / "standin-out" / f"c{i}", {"case_id": f"c{i}"})
     return {"cases": n, "per_case_ms": 1e3 * (time.perf_counter() - t) / n}
 
 
@@ -172,7 +171,7 @@ def bench_status_verify(tmp: Path, n_seeds: int = 4) -> dict:
     eng, rid = StandIn(), "0" * 16
     for c in camp.cases:
         cid = case_id(c.case, "standin", rid)
-        run_case(c.case, "standin", camp.output / cid, {"case_id": cid, "recipe_id": rid}, engine=eng)
+        run_case(c.case, eng, camp.output / cid, {"case_id": cid, "recipe_id": rid})
     n = len(camp.cases)
     t = time.perf_counter()
     with CampaignStore(camp.output) as store:       # no index: rebuilt, every folder verified

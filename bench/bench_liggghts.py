@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 from interphase.campaign.runner import run_case
+from interphase.engines.base import engine_spec
 from interphase.case import Case
 from interphase.engines.liggghts import Liggghts
 from interphase.surface.spec import ProfileSpec
@@ -42,7 +43,7 @@ def loop_rate(log: Path, n_grains: int) -> float:
 
 def driver_share(case: Case, folder: Path) -> tuple[float, dict]:
     t0 = time.perf_counter()
-    out = run_case(case, "liggghts", folder)
+    out = run_case(case, engine_spec("liggghts"), folder)
     wall = time.perf_counter() - t0
     assert out["status"] == "done", out
     timings = json.loads((folder / "case.json").read_text())["timings"]

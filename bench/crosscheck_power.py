@@ -7,7 +7,7 @@ For each alteration (friction × 1.3 on the sliding flat, rolling resistance off
 flat at μs 0.5, stiffness × 4 on the sliding flat) a campaign of that one group on seeds 1…N is
 written beside the output, the finished LIGGGHTS folders of the standard set's output are copied into
 an output of its own (`<output>-power-<name>`), and `crosscheck()` runs YADE there with the test-only
-mis-mapped engine (tests/test_crosscheck_power.py: no production flag), in process. The campaign's
+mis-mapped engine (tests/test_crosscheck_power.py: no production flag), passed as an engine value. The campaign's
 `specimen_from` holds: YADE shears LIGGGHTS' specimens. Prints, per alteration, the judged rows.
 """
 
@@ -21,11 +21,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from interphase.campaign import plan as plan_mod  # noqa: E402
-from interphase.campaign import run as run_mod  # noqa: E402
 from interphase.campaign.crosscheck import crosscheck  # noqa: E402
-from interphase.engines import base  # noqa: E402
-from tests.test_crosscheck_power import InProcessExecutor, _copy_done, mismapped_yade  # noqa: E402
+from tests.test_crosscheck_power import _copy_done, mismapped_yade  # noqa: E402
 
 #: name → (group of the standard set, alteration, the metric it should move)
 ALTERATIONS = {
@@ -55,7 +52,6 @@ def main() -> None:
     ap.add_argument("--only", nargs="*", default=list(ALTERATIONS))
     a = ap.parse_args()
     text = Path(a.campaign).read_text()
-    run_mod.LocalExecutor = InProcessExecutor
     out_root = Path(a.output)
     for name in a.only:
         group, alteration, metric = ALTERATIONS[name]
@@ -63,9 +59,7 @@ def main() -> None:
         path.write_text(one_group(text, group, a.seeds))
         out = out_root.parent / f"{out_root.name}-power-{name}"
         _copy_done(out_root, out)
-        base._REGISTRY["yade"] = mismapped_yade(**alteration)
-        plan_mod.engine_identity.cache_clear()
-        report = crosscheck(path, output=out)
+        report = crosscheck(path, output=out, engines=("liggghts", mismapped_yade(**alteration)))
         j = report.ensembles[report.ensembles["verdict"].notna()]
         print(f"\n## {name} × {alteration} on {group} (seeds 1–{a.seeds}); should move {metric}")
         for r in j.itertuples():

@@ -300,8 +300,8 @@ def test_interrupted_run_stops_the_crosscheck(tmp_path, monkeypatch):
 
     calls = []
 
-    def interrupted_run(path, *, engine=None, **kw):
-        calls.append(engine)
+    def interrupted_run(path, *, engines=None, **kw):
+        calls.append(*(e.name for e in engines))      # one engine value per run
         return RunReport(campaign="xc-tiny", output=tmp_path, interrupted=True)
 
     monkeypatch.setattr(run_mod, "run_campaign", interrupted_run)

@@ -2,15 +2,12 @@
 
 The YADE side is run with a deliberate mis-mapping — particle–surface friction × k, rolling
 resistance off, stiffness × k — WITHOUT a production flag: the YADE engine renders its input as data
-(params.json, engines/yade.py), and `mismapped_yade(...)` is a test-only subclass whose render()
-alters that data. It is put in the engine registry under the name "yade" for one test
-(`use_yade`), so campaign planning, case ids and runs go through the ordinary code. Its template
-hash mixes in the alteration, so its cases never share a folder (a case id) with the true mapping's
-or with another alteration's.
-
-The local executor runs each case in a spawned worker, which would build the engine from a fresh
-registry (the true YADE); `use_yade` swaps it for `InProcessExecutor`, the same contract in threads
-of this process (the engines still run as subprocesses, `jobs` at a time).
+(params.json, engines/yade.py), and `MismappedYade` is a test-only subclass whose render() alters
+that data. `mismapped_yade(...)` gives it as an engine value (engines.base.EngineSpec), which
+`crosscheck(..., engines=...)` takes as it takes any argument: campaign planning, case ids and runs
+go through the ordinary code, and the value travels to the local executor's spawned workers (the
+class by reference: they import this module). Its recipe id mixes in the alteration, so its cases
+never share a folder (a case id) with the true mapping's or with another alteration's.
 """
 
 from __future__ import annotations
@@ -18,8 +15,6 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
-import os
-from concurrent.futures import ThreadPoolExecutor, as_completed
 
 import numpy as np
 import pandas as pd
@@ -27,6 +22,7 @@ import pytest
 
 from interphase.campaign.crosscheck import METRICS, crosscheck
 from interphase.cli import main
+from interphase.engines.base import EngineSpec, engine_spec
 from interphase.engines.yade import Yade
 from tests.campaign_files import toml_text
 from tests.conftest import need_binary
@@ -49,63 +45,27 @@ def mismap(params: dict, *, friction: float = 1.0, rolling: bool = True, stiffne
     return p
 
 
-def mismapped_yade(**alteration) -> type[Yade]:
-    """A Yade engine class whose params.json is `mismap(params, **alteration)`."""
-    alteration = dict(alteration)
+class MismappedYade(Yade):
+    """The Yade engine whose params.json is `mismap(params, **alteration)` (test only)."""
 
-    class MismappedYade(Yade):
-        def render(self, case):
-            files = super().render(case)
-            files["params.json"] = json.dumps(mismap(json.loads(files["params.json"]), **alteration),
-                                              allow_nan=False)
-            return files
+    def __init__(self, *args, alteration: tuple = (), **kwargs):
+        super().__init__(*args, **kwargs)
+        self.alteration = dict(alteration)
 
-        def recipe_id(self) -> str:
-            mix = super().recipe_id() + json.dumps(alteration, sort_keys=True)
-            return hashlib.sha256(mix.encode()).hexdigest()[:16]
+    def render(self, case):
+        files = super().render(case)
+        files["params.json"] = json.dumps(mismap(json.loads(files["params.json"]), **self.alteration),
+                                          allow_nan=False)
+        return files
 
-    MismappedYade.alteration = alteration
-    return MismappedYade
-
-
-class InProcessExecutor:
-    """LocalExecutor's contract (executors.py) in threads of this process."""
-    name = "local"
-
-    def __init__(self, jobs: int = 0):
-        self.jobs = jobs if jobs and jobs > 0 else (os.cpu_count() or 1)
-
-    def run(self, tasks, on_event, grace: float = 30.0) -> None:
-        from interphase.campaign.runner import run_case
-
-        with ThreadPoolExecutor(max_workers=self.jobs) as pool:
-            futures = {}
-            for t in tasks:
-                on_event("started", t.case_id, {"pid": os.getpid()})
-                futures[pool.submit(run_case, t.case, t.engine, t.folder, t.meta)] = t
-            for fut in as_completed(futures):
-                on_event("finished", futures[fut].case_id, fut.result())
+    def recipe_id(self) -> str:
+        mix = super().recipe_id() + json.dumps(self.alteration, sort_keys=True)
+        return hashlib.sha256(mix.encode()).hexdigest()[:16]
 
 
-@pytest.fixture
-def use_yade(monkeypatch):
-    """use_yade(cls): campaigns of this test run YADE as `cls` (None: the true engine), in process."""
-    from interphase.campaign import plan as plan_mod
-    from interphase.campaign import run as run_mod
-    from interphase.engines import base
-
-    monkeypatch.setattr(run_mod, "LocalExecutor", InProcessExecutor)
-
-    def use(cls):
-        if cls is not None:
-            monkeypatch.setitem(base._REGISTRY, "yade", cls)
-        else:
-            monkeypatch.setitem(base._REGISTRY, "yade", Yade)
-        plan_mod.engine_identity.cache_clear()      # case ids follow the engine's recipe id
-
-    yield use
-    monkeypatch.undo()
-    plan_mod.engine_identity.cache_clear()
+def mismapped_yade(**alteration) -> EngineSpec:
+    """This machine's YADE as an engine value whose class is MismappedYade with `alteration`."""
+    return engine_spec("yade", cls=MismappedYade, options=(("alteration", tuple(sorted(alteration.items()))),))
 
 
 def test_mismapping_alters_only_the_named_parameters():
@@ -115,8 +75,8 @@ def test_mismapping_alters_only_the_named_parameters():
 
     case = Case(test="interface", profile=ProfileSpec("flat"), friction_ps=0.5, rolling_friction=0.1, shear_modulus=50e6, n_grains=200)
     true = json.loads(Yade().render(case)["params.json"])
-    cls = mismapped_yade(**GROSS)
-    bad = json.loads(cls().render(case)["params.json"])
+    spec = mismapped_yade(**GROSS)
+    bad = json.loads(spec.build().render(case)["params.json"])
     m, b = true["material"], bad["material"]
     assert b["mu_ps"] == pytest.approx(1.3 * m["mu_ps"]) and m["mu_ps"] == 0.5
     assert m["krot"] > 0 and m["eta"] > 0 and b["krot"] == b["eta"] == b["krot_wall"] == b["mu_r"] == 0
@@ -124,8 +84,13 @@ def test_mismapping_alters_only_the_named_parameters():
     changed = {k for k in m if m[k] != b[k]}
     assert changed == {"mu_ps", "krot", "eta", "krot_wall", "mu_r", "E", "E_wall"}
     assert {k: v for k, v in true.items() if k != "material"} == {k: v for k, v in bad.items() if k != "material"}
-    hashes = {Yade().recipe_id(), cls().recipe_id(), mismapped_yade(friction=1.3)().recipe_id()}
-    assert len(hashes) == 3
+    hashes = {Yade().recipe_id(), spec.recipe_id(), mismapped_yade(friction=1.3).recipe_id()}
+    assert len(hashes) == 3 and engine_spec("yade").recipe_id() == Yade().recipe_id()
+    # the value travels to a worker whole: the engine it builds there is the mis-mapped one
+    import pickle
+
+    again = pickle.loads(pickle.dumps(spec))
+    assert again == spec and json.loads(again.build().render(case)["params.json"]) == bad
 
 
 # ---- the power of the standard set's judged metrics, tiny (issue 16 item 3) ------------------------
@@ -249,7 +214,7 @@ def test_real_crosscheck_table_files_and_json(true_mapping, capsys):
 
 @pytest.mark.liggghts
 @pytest.mark.yade
-def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(true_mapping, use_yade):
+def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(true_mapping):
     """The true mapping, friction × 1.3 and stiffness × 2 on the same three LIGGGHTS runs of a tiny
     periodic flat at μs = 0.2 (uniform grains), YADE shearing LIGGGHTS' specimens (specimen_from):
     friction → the critical-state ratio DIFFERS; stiffness → the mean overlap DIFFERS; the true
@@ -269,8 +234,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     for name, alteration in (("friction", {"friction": 1.3}), ("stiffness", {"stiffness": 2.0})):
         out = root / name
         _copy_done(true_out, out)                          # the same LIGGGHTS runs: no rerun
-        use_yade(mismapped_yade(**alteration))
-        report = crosscheck(path, output=out)
+        report = crosscheck(path, output=out, engines=("liggghts", mismapped_yade(**alteration)))
         assert not report.missing
         j = report.judged.set_index("metric")
         verdicts[name] = {m: j.loc[m, "verdict"] for m in ("residual_stress_ratio", "overlap_mean_d50")}
@@ -303,7 +267,7 @@ ROLLING_CELL = toml_text(**(TINY_PERIODIC_TABLES | {"case": TINY_PERIODIC_TABLES
 
 @pytest.mark.liggghts
 @pytest.mark.yade
-def test_rolling_off_differs_on_the_rolling_held_flat(tmp_path_factory, use_yade):
+def test_rolling_off_differs_on_the_rolling_held_flat(tmp_path_factory):
     """Rolling resistance off in YADE, on the standard set's cell at μs 0.5 (the grains roll over
     the flat: the rolling law holds the load), YADE shearing LIGGGHTS' specimens, seeds 1-3: θr over
     the loaded snapshots DIFFERS, while the true mapping AGREES on the same LIGGGHTS runs. Measured
@@ -314,11 +278,9 @@ def test_rolling_off_differs_on_the_rolling_held_flat(tmp_path_factory, use_yade
     folder = tmp_path_factory.mktemp("xc-rolling")
     path = folder / "xc.toml"
     path.write_text(ROLLING_CELL)
-    use_yade(None)
     true = crosscheck(path, output=folder / "true")
     _copy_done(folder / "true", folder / "off")
-    use_yade(mismapped_yade(rolling=False))
-    off = crosscheck(path, output=folder / "off")
+    off = crosscheck(path, output=folder / "off", engines=("liggghts", mismapped_yade(rolling=False)))
     verdicts = {}
     for name, report in (("true", true), ("off", off)):
         assert not report.missing

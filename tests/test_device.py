@@ -117,9 +117,11 @@ def yade_device(files: dict) -> dict:
 def test_both_engines_render_one_device(name):
     case = CASES[name]
     lig_engine, yade_engine = _engines()
-    device_module.device.cache_clear()
+    before = device_module.device.cache_info()
     lig_files, yade_files = lig_engine.render(case), yade_engine.render(case)
-    assert device_module.device.cache_info().misses == 1       # computed once for both engines
+    after = device_module.device.cache_info()
+    # computed at most once for both engines (not at all when an earlier test computed it)
+    assert after.misses - before.misses <= 1 and after.hits - before.hits >= 1
     lig, yade = liggghts_device(lig_files), yade_device(yade_files)
     for key in ("moving", "fixed", "platen", "reach", "platen_force", "platen_band", "dt", "shear_velocity",
                 "steps", "bounds", "window", "exits", "period", "bed"):

@@ -55,7 +55,7 @@ def plan(campaign, engine: str | None = None, *, lazy: bool = False):
     from interphase.campaign.plan import plan as _plan
 
     c = _campaign(campaign)
-    engines = [engine] if engine else None
+    engines = (engine,) if engine else None
     return iter_plan(c, engines) if lazy else _plan(c, engines)
 
 
@@ -70,8 +70,8 @@ def run(campaign, *, runs: PathLike | None = None, engine: str | None = None, ex
     from interphase.campaign.run import run_campaign
 
     c = _campaign(campaign, runs)
-    return run_campaign(c.path, output=runs if runs is not None else c.output, engine=engine, executor=executor,
-                        jobs=jobs, rerun_failed=rerun_failed, dry_run=dry_run, yes=yes,
+    return run_campaign(c.path, output=runs if runs is not None else c.output, engines=(engine,) if engine else None,
+                        executor=executor, jobs=jobs, rerun_failed=rerun_failed, dry_run=dry_run, yes=yes,
                         stream=io.StringIO() if quiet else None, live=False)
 
 

@@ -326,10 +326,17 @@ def _add_campaign(sub) -> None:
     p.set_defaults(func=_cmd_campaign_status)
 
 
+def _engines(name: str | None):
+    """`--engine NAME` as the engine value the run path carries (None: the file's engines)."""
+    from interphase.engines.base import engine_spec
+
+    return None if name is None else (engine_spec(name),)
+
+
 def _cmd_campaign_run(args) -> int:
     from interphase.campaign.run import run_campaign
 
-    report = run_campaign(args.campaign, engine=args.engine, executor=args.executor, jobs=args.jobs,
+    report = run_campaign(args.campaign, engines=_engines(args.engine), executor=args.executor, jobs=args.jobs,
                           rerun_failed=args.rerun_failed, rerun_stale=args.rerun_stale, dry_run=args.dry_run,
                           output=args.runs, restore=args.restore, yes=args.yes, render=args.render,
                           list_all=args.list_all, stream=sys.stderr if args.json else None,
@@ -348,7 +355,7 @@ def _cmd_campaign_run(args) -> int:
 def _cmd_campaign_status(args) -> int:
     from interphase.campaign.run import campaign_status
 
-    campaign, planned, df = campaign_status(args.campaign, output=args.runs, engine=args.engine)
+    campaign, planned, df = campaign_status(args.campaign, output=args.runs, engines=_engines(args.engine))
     if not campaign.output.is_dir():
         raise InputError(f"the runs folder {campaign.output} does not exist ({campaign.output_from})",
                          where=args.campaign, fix=f"run `campaign run {args.campaign}` first, or give --runs DIR "
@@ -364,22 +371,27 @@ def _cmd_campaign_status(args) -> int:
     import shutil
 
     width = max(80, min(shutil.get_terminal_size((80, 24)).columns, 120))
-    print(_wrap(f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())), width))
-    print(_wrap(f"runs folder {campaign.output} ({campaign.output_from})", width))
-    for line in status_rows(df, width):
-        print(line)
+    print("\n".join(status_text(campaign, df, width)))
+    return 0
+
+
+def status_text(campaign, df, width: int = 80) -> list[str]:
+    """`campaign status`'s lines of campaign_status's (Campaign, DataFrame): the counts, the runs
+    folder, one row per case, what is wrong with failed or corrupt ones, one line per kind of stale,
+    and the seed rounds."""
+    counts = df["status"].value_counts().to_dict()
+    lines = [_wrap(f"{campaign.name}: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())), width),
+             _wrap(f"runs folder {campaign.output} ({campaign.output_from})", width), *status_rows(df, width)]
     bad = df[df["status"].isin(("corrupt", "failed"))]
     for r in bad.itertuples():       # what is wrong and the fix, under the table (wrapped, not cut)
         if isinstance(r.message, str) and r.message:
-            print(_wrap(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width))
+            lines.append(_wrap(f"{str(r.case_id)[:8]} {r.status}: {r.message}", width))
     stale = df[df["status"] == "stale"]
     for kind, rows in stale.groupby("cause"):   # one line per kind: a recipe change makes every case stale
-        print(_wrap(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: {rows['message'].iloc[0]}",
-                    width))
-    if seeds is not None:
-        for line in seed_rows(seeds, width):
-            print(line)
-    return 0
+        lines.append(_wrap(f"{len(rows)} stale ({kind}), e.g. {str(rows['case_id'].iloc[0])[:8]}: "
+                           f"{rows['message'].iloc[0]}", width))
+    seeds = df.attrs.get("seeds")
+    return lines + (seed_rows(seeds, width) if seeds is not None else [])
 
 
 def seed_rows(seeds, width: int = 80) -> list[str]:

@@ -37,7 +37,9 @@ overlap_mean_d50 [D50]. Reported only unless their optional tolerance is set: pe
 stick–slip event at this size), theta_r_surface_deg and theta_n_surface_deg (one snapshot), and
 always shear_disp_at_peak [m], dilation_at_peak [m]. A metric neither engine defines for a case (θ of
 a box test) is left out of the verdict.
-Runs go through interphase.campaign.run.run_campaign, so finished cases (DONE) are reused.
+Runs go through interphase.campaign.run.run_campaign, so finished cases (DONE) are reused. The
+engines are values (engines.base.EngineSpec), made once from their names unless given: a test
+passes a YADE of its own (a deliberately mis-mapped one) as it would pass any argument.
 """
 
 from __future__ import annotations
@@ -382,22 +384,24 @@ def _num(v) -> float:
 
 
 def crosscheck(path, *, jobs: int | None = None, output=None, rerun_failed: bool = False, run: bool = True,
-               stream=None) -> CrosscheckReport:
-    """Run (or reuse) every case with both engines, then judge their seed ensembles (module docstring)."""
+               stream=None, engines=None) -> CrosscheckReport:
+    """Run (or reuse) every case with both engines, then judge their seed ensembles (module docstring).
+    `engines`: the two engines as EngineSpecs (or names), LIGGGHTS first; default ENGINES."""
     from interphase.campaign import store as st
-    from interphase.campaign.plan import plan
+    from interphase.campaign.plan import engine_specs, plan
     from interphase.campaign.run import run_campaign
 
     stream = stream or sys.stdout
     campaign, tol, readable, cleanup = load(path, output=output)
+    specs = tuple(engine_specs(campaign, engines or ENGINES).values())
     try:
         if run:
-            for engine in ENGINES:
-                report = run_campaign(readable, engine=engine, jobs=jobs, rerun_failed=rerun_failed,
+            for spec in specs:
+                report = run_campaign(readable, engines=[spec], jobs=jobs, rerun_failed=rerun_failed,
                                       output=output, stream=stream, live=False)
                 if report.interrupted:      # Ctrl-C / SIGTERM stops the cross-check, not one engine's half
                     raise KeyboardInterrupt
-        planned = plan(campaign, list(ENGINES))
+        planned = plan(campaign, specs)
     finally:
         cleanup()
     summaries: dict[str, dict[str, dict]] = {}

@@ -6,6 +6,10 @@
     Interruption (KeyboardInterrupt / runner.Interrupted in the caller) stops running cases, records
     them as interrupted in their folders, reports them finished, and re-raises.
 
+A Task carries its engine as a value (engines.base.EngineSpec: class, profile, Recipe, recipe
+version), pickled to the worker as it is: a worker builds the very engine the plan hashed the case
+id with, never looks a name up again.
+
 `local`: a pool of worker processes (concurrent.futures, spawn), `jobs` at a time; each case runs its
 engine as a subprocess. `slurm`: submitit job arrays, one per time-limit bucket, at most
 `max_concurrent` tasks running per array, requeued on preemption (submitit + sbatch --requeue); a
@@ -28,6 +32,7 @@ from typing import Callable
 from interphase.campaign import store as st
 from interphase.campaign.runner import Interrupted, run_case
 from interphase.case import Case
+from interphase.engines.base import EngineSpec
 
 OnEvent = Callable[[str, str, dict], None]
 
@@ -35,7 +40,7 @@ OnEvent = Callable[[str, str, dict], None]
 @dataclass(frozen=True)
 class Task:
     case: Case
-    engine: str
+    engine: EngineSpec
     folder: Path
     meta: dict
 
@@ -99,7 +104,7 @@ def _raise_interrupted(signum, frame):
     raise Interrupted(f"{name}: {_STOP_REASON}" if _STOP_REASON else name)
 
 
-def _local_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
+def _local_task(case: Case, engine: EngineSpec, folder: str, meta: dict) -> dict:
     # handlers before the "started" event: the parent signals a worker once it has heard it start
     signal.signal(signal.SIGINT, _raise_interrupted)
     signal.signal(signal.SIGTERM, _raise_interrupted)
@@ -316,7 +321,7 @@ REQUEUED_STATES = ("PENDING", "REQUEUED", "REQUEUE_FED")
 SLURM_VERDICT_WAIT = 60.0
 
 
-def _slurm_task(case: Case, engine: str, folder: str, meta: dict) -> dict:
+def _slurm_task(case: Case, engine: EngineSpec, folder: str, meta: dict) -> dict:
     """Body of one SLURM array task: the same runner as the local pool.
 
     SIGTERM (SLURM's time limit, scancel, preemption) becomes a recorded interruption: the engine is

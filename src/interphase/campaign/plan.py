@@ -9,17 +9,21 @@ engine and recipe (the engine's number in interphase.recipe.RECIPE_VERSIONS and 
 every machine, with or without the engine installed; a new recipe version gives that engine new ids (and so new
 folders: old results are never overwritten). The engine build that ran a case is provenance in its
 case.json.
+
+Engines are values here: a name given to `plan` is made once into an EngineSpec
+(interphase.engines.base.engine_spec: class, profile, Recipe, recipe version), and every
+PlannedCase carries its engine's (`engine_spec`), which the executors hand to the runner as it is.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from interphase.case import Case, Start, case_id, physical_id
 from interphase.campaign.schema import Campaign
+from interphase.engines.base import EngineSpec, engine_spec
 from interphase.errors import InputError
 
 
@@ -39,6 +43,9 @@ class PlannedCase:
     recipe_id: str = ""
     physical_id: str = ""                       # interphase.case.physical_id: the same for every seed of the case
     params: dict = field(default_factory=dict, compare=False, hash=False)
+    #: the engine as a value (class, profile, Recipe, recipe version): what runs the case; its
+    #: identity is `recipe_id`
+    engine_spec: EngineSpec | None = field(default=None, compare=False, hash=False, repr=False)
 
     def meta(self, campaign: str = "") -> dict:
         """What the runner records in case.json besides the inputs (JSON data)."""
@@ -54,14 +61,6 @@ def _jsonable(v):
             return {k: _jsonable(x) for k, x in v}
         return [_jsonable(x) for x in v]
     return v
-
-
-@functools.lru_cache(maxsize=None)
-def engine_identity(name: str) -> str:
-    """The recipe id of an engine (Engine.recipe_id), once per process; runs no binary."""
-    from interphase.engines.base import get_engine
-
-    return get_engine(name).recipe_id()
 
 
 def flat_params(case: Case) -> dict:
@@ -93,26 +92,29 @@ def flat_params(case: Case) -> dict:
     return out
 
 
-def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
-         identity=engine_identity) -> list[PlannedCase]:
+def plan(campaign: Campaign, engines=None, identity=None) -> list[PlannedCase]:
     """Every (case, engine) of the campaign, box tests first (E needs them), in a stable order.
 
-    `engines` overrides the campaign's engine list (`campaign run --engine`). `identity(name)` gives
-    the engine's recipe id; benchmarks may pass a constant one."""
+    `engines` (names or EngineSpecs) overrides the campaign's engine list (`campaign run --engine`);
+    a name becomes its EngineSpec here, once. The recipe id is the EngineSpec's; `identity(name)`,
+    when given, replaces it (benchmarks and tests may pass a constant one)."""
     if campaign.lazy:
         return list(iter_plan(campaign, engines, identity))
-    names = _engine_names(campaign, engines)
+    specs = engine_specs(campaign, engines)
+    rids = {s.name: identity(s.name) if identity else s.recipe_id() for s in specs.values()}
     out: list[PlannedCase] = []
     order = sorted(range(len(campaign.cases)), key=lambda i: (campaign.cases[i].role != "box", i))
     src = campaign.specimen_from
+    names = tuple(specs)
     starts = {}
     if src:
         names = tuple(sorted(names, key=lambda n: n != src))     # the specimens are made first
+        src_id = rids[src] if src in rids else (identity(src) if identity else engine_spec(src).recipe_id())
         for i, c in enumerate(campaign.cases):
-            sid = case_id(c.case, src, identity(src))
+            sid = case_id(c.case, src, src_id)
             starts[i] = Start(src, sid, str(campaign.output / sid))
     for name in names:
-        rid = identity(name)
+        rid = rids[name]
         cases = [c.case if name == src or i not in starts else c.case.replace(start=starts[i])
                  for i, c in enumerate(campaign.cases)]
         ids = {i: case_id(case, name, rid) for i, case in enumerate(cases)}
@@ -122,21 +124,25 @@ def plan(campaign: Campaign, engines: tuple[str, ...] | list[str] | None = None,
             out.append(PlannedCase(
                 case_id=ids[i], engine=name, case=cases[i], group=c.group, role=c.role, label=case_label(c.case),
                 values=c.values, pair_id=ids[c.pair] if c.pair is not None else None, index=len(out),
-                recipe_id=rid, physical_id=physical_id(cases[i]), params=params))
+                recipe_id=rid, physical_id=physical_id(cases[i]), params=params, engine_spec=specs[name]))
     return out
 
 
-def _engine_names(campaign: Campaign, engines) -> tuple[str, ...]:
+def engine_specs(campaign: Campaign, engines=None) -> dict[str, EngineSpec]:
+    """{name: EngineSpec} of `engines` (names or EngineSpecs; None: the campaign's engine names), in
+    their order; a name is made into this machine's EngineSpec (engines.base.engine_spec)."""
     from interphase.campaign.schema import ENGINES
 
-    names = tuple(engines) if engines else campaign.engines
-    for n in names:
-        if n not in ENGINES:
-            raise InputError(f"unknown engine {n!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
-    return names
+    out = {}
+    for e in tuple(engines) if engines else campaign.engines:
+        if not isinstance(e, EngineSpec) and e not in ENGINES:
+            raise InputError(f"unknown engine {e!r}", where="--engine", fix=f"use one of {', '.join(ENGINES)}")
+        spec = engine_spec(e)
+        out[spec.name] = spec
+    return out
 
 
-def iter_plan(campaign: Campaign, engines=None, identity=engine_identity):
+def iter_plan(campaign: Campaign, engines=None, identity=None):
     """The planned cases one at a time, never all in memory: what `campaign run --dry-run` counts
     and samples. A campaign of at most schema.EAGER_MAX cases gives plan()'s list in plan()'s
     order; a larger (lazy) one is built as it is read, each box test just before the first
@@ -146,21 +152,22 @@ def iter_plan(campaign: Campaign, engines=None, identity=engine_identity):
         return
     from interphase.campaign.schema import iter_cases
 
-    names = _engine_names(campaign, engines)
+    specs = engine_specs(campaign, engines)
     if campaign.specimen_from:
         raise InputError(f"a campaign of {campaign.size} cases with specimen_from is not planned lazily",
                          where=f"{campaign.path}: campaign.specimen_from",
                          fix="split the sweep into files of at most 20000 cases")
-    rids = {n: identity(n) for n in names}
+    rids = {n: identity(n) if identity else s.recipe_id() for n, s in specs.items()}
     index = 0
     for c, box, new in iter_cases(campaign):
-        for name in names:
+        for name in specs:
             rid = rids[name]
             for b in new + ([c] if c is not None else []):
                 pair = case_id(box.case, name, rid) if b is c and box is not None else None
                 yield PlannedCase(case_id=case_id(b.case, name, rid), engine=name, case=b.case, group=b.group,
                                   role=b.role, label=case_label(b.case), values=b.values, pair_id=pair, index=index,
-                                  recipe_id=rid, physical_id=physical_id(b.case), params=flat_params(b.case))
+                                  recipe_id=rid, physical_id=physical_id(b.case), params=flat_params(b.case),
+                                  engine_spec=specs[name])
                 index += 1
 
 

@@ -81,9 +81,10 @@ def write_curves(summaries: pd.DataFrame, store, path: Path, points: int = CURVE
     return path
 
 
-def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
+def open_campaign(campaign_path: str | Path, output: str | Path | None = None, engines=None):
     """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
-    runs' folder when not where the file says, as `campaign run --output` wrote them)."""
+    runs' folder when not where the file says, as `campaign run --output` wrote them; `engines`: the
+    engines whose recipes are this version's, names or EngineSpecs, default the file's)."""
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
@@ -93,7 +94,7 @@ def open_campaign(campaign_path: str | Path, output: str | Path | None = None):
         raise InputError(f"no results in {root}", where=str(campaign_path),
                          fix=f"run `campaign run {campaign_path}` first")
     store = CampaignStore(root)
-    return campaign, store, one_run_per_case(store.summaries(), campaign)
+    return campaign, store, one_run_per_case(store.summaries(), campaign, engines=engines)
 
 
 def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.DataFrame:
@@ -103,7 +104,7 @@ def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.Da
     are left out, and counted: attrs `recipes` {engine: recipe id used}, `current` {engine: whether
     it is this version's}, `other_recipe` and `not_asked` (runs left out). Mixing recipes would put
     two protocols on one figure and count a case run again under a new recipe twice. `plan_options`
-    go to campaign.plan.plan (a test's recipe identity)."""
+    go to campaign.plan.plan (the engines, a test's recipe identity)."""
     from interphase.campaign.plan import plan
 
     attrs = dict(recipes={}, current={}, other_recipe=0, not_asked=0)

@@ -2,6 +2,9 @@
 
     run_campaign("campaigns/group1.toml", executor="slurm")   → RunReport (counts; exit code)
 
+`engines` (names or engines.base.EngineSpec values; default: the file's names) are made into
+values once, by the plan; every planned case carries its engine's value to the executor.
+
 The campaign lock (filelock) makes a second `campaign run` of the same campaign stop with a clear
 message. Finished cases (DONE) are never rerun; failed and SLURM-killed ones only with
 `rerun_failed`, and so are corrupt ones (DONE, but the folder does not verify: store.verify_folder;
@@ -77,15 +80,15 @@ class Stale:
     run_id: str            # the folder of the finished run it refers to
 
 
-def engine_builds(names) -> dict[str, str | None]:
-    """{engine: the build this machine runs}; None where it cannot be told (not installed, banner
-    unreadable): nothing is judged stale against it, so a laptop without engines flags nothing."""
-    from interphase.engines.base import get_engine
-
+def engine_builds(engines) -> dict[str, str | None]:
+    """{engine name: the build this machine runs} of `engines` (EngineSpecs); None where it cannot
+    be told (not installed, banner unreadable): nothing is judged stale against it, so a laptop
+    without engines flags nothing."""
     out = {}
-    for n in dict.fromkeys(names):
-        v = get_engine(n).version()
-        out[n] = None if v in ("not-installed", "unknown") else v
+    for spec in engines:
+        if spec.name not in out:
+            v = spec.build().version()
+            out[spec.name] = None if v in ("not-installed", "unknown") else v
     return out
 
 
@@ -156,12 +159,13 @@ LARGE = 10_000
 SAMPLE = 10
 
 
-def run_campaign(path, *, engine: str | None = None, executor: str | None = None, jobs: int | None = None,
+def run_campaign(path, *, engines=None, executor: str | None = None, jobs: int | None = None,
                  rerun_failed: bool = False, rerun_stale: bool = False, dry_run: bool = False, output=None,
                  restore=None, stream=None, live: bool | None = None, yes: bool = False,
                  render: bool = False, list_all: bool = False) -> RunReport:
     """Run what is not finished. `restore`: a summaries table whose rows of planned cases become
-    finished folders first (interphase.campaign.restore), so that only the rest runs.
+    finished folders first (interphase.campaign.restore), so that only the rest runs. `engines`:
+    names or EngineSpecs instead of the file's engine names (`--engine`; a test's engine values).
 
     The count comes first, before anything is planned: a campaign of more than LARGE cases is
     run (or fully listed by a dry run) only with `yes`. A dry run prints the count, a sample of
@@ -174,7 +178,7 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
         raise InputError(f"unknown executor {executor!r}", where="--executor", fix=f"use one of {', '.join(EXECUTORS)}")
     if jobs is not None and jobs < 0:
         raise InputError(f"must be ≥ 0 (0 = one per core), got {jobs}", where="--jobs")
-    n_engines = 1 if engine else len(campaign.engines)
+    n_engines = len(engines) if engines else len(campaign.engines)
     count = campaign.size * n_engines
     print(f"campaign {campaign.name}: {campaign.size} case(s) in the sweeps × {n_engines} engine(s) = {count}, "
           f"plus their box tests; runs folder {campaign.output} ({campaign.output_from})", file=stream, flush=True)
@@ -187,12 +191,12 @@ def run_campaign(path, *, engine: str | None = None, executor: str | None = None
     if dry_run and (campaign.lazy or large):
         from interphase.campaign.plan import iter_plan
 
-        return _dry_run(campaign, iter_plan(campaign, [engine] if engine else None), executor, stream, report=RunReport(
+        return _dry_run(campaign, iter_plan(campaign, engines), executor, stream, report=RunReport(
             campaign.name, campaign.output), rerun_failed=rerun_failed, rerun_stale=rerun_stale, builds={},
             restore=restore, render=render, list_all=list_all, stop_after_sample=large)
-    planned = plan(campaign, [engine] if engine else None)
+    planned = plan(campaign, engines)
     report = RunReport(campaign.name, campaign.output, planned=len(planned))
-    builds = engine_builds(p.engine for p in planned)
+    builds = engine_builds(p.engine_spec for p in planned)
     if dry_run:
         if campaign.seeds is not None:      # the next round: what the finished runs ask for now
             planned = _next_round(campaign, planned, stream)
@@ -272,7 +276,7 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
              executor: str, jobs, stream, live) -> None:
     """Run `todo` on the executor, recording every start and finish in the index and `report`;
     Ctrl-C, SIGTERM and a full disk stop it cleanly (report.interrupted)."""
-    tasks = [Task(p.case, p.engine, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
+    tasks = [Task(p.case, p.engine_spec, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
     for p in todo:
         store.set_status(p.case_id, "queued")
     slots = _slots(campaign, executor, jobs)
@@ -375,8 +379,8 @@ def _stages(tasks: list[Task], specimen_from: str | None) -> list[list[Task]]:
     start from their specimens), then the rest; else all at once."""
     if not specimen_from:
         return [tasks]
-    first = [t for t in tasks if t.engine == specimen_from]
-    return [s for s in (first, [t for t in tasks if t.engine != specimen_from]) if s]
+    first = [t for t in tasks if t.engine.name == specimen_from]
+    return [s for s in (first, [t for t in tasks if t.engine.name != specimen_from]) if s]
 
 
 def _start_status(case) -> str:
@@ -406,8 +410,6 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     (through the index, as `campaign status` does): a corrupt one is listed as kept, or as rerun with
     `rerun_failed`; a case without a folder whose id is a row of `restore` (a summaries table) as
     restored. `stop_after_sample`: a campaign over LARGE without --yes: the sample, then stop."""
-    from interphase.engines.base import get_engine
-
     record = set()
     if restore is not None:
         from interphase.campaign.restore import restorable_ids
@@ -445,8 +447,9 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
         tallies[action] = tallies.get(action, 0) + 1
         n += 1
         if render and action == "run" and _start_status(p.case) == "done":
-            eng = engines.setdefault(p.engine, get_engine(p.engine))
-            eng.write_input(p.case, root / p.case_id)
+            if p.engine not in engines:
+                engines[p.engine] = p.engine_spec.build()
+            engines[p.engine].write_input(p.case, root / p.case_id)
         if n <= SAMPLE or list_all:
             limit = time_limit_minutes(p.case, campaign.execution.time_factor, campaign.execution.time_limit)
             shown = f"starts from {p.case.start.label()}; " if action == "run" and _start_status(p.case) != "done" \
@@ -468,13 +471,14 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     return report
 
 
-def campaign_status(path, *, output=None, engine: str | None = None):
+def campaign_status(path, *, output=None, engines=None):
     """(Campaign, planned cases, status DataFrame of the planned cases; pending where never run).
     A stale case (find_stale) shows status 'stale', cause the kind, message the reason and fix.
     With [seeds] (sequential seeds) the planned cases are the runs the rounds asked for so far, and
-    `df.attrs["seeds"]` is one row per physical case (campaign.sequential.rounds_frame); else None."""
+    `df.attrs["seeds"]` is one row per physical case (campaign.sequential.rounds_frame); else None.
+    `engines`: names or EngineSpecs instead of the file's engine names."""
     campaign = load_campaign(path, output=output)
-    planned = plan(campaign, [engine] if engine else None)
+    planned = plan(campaign, engines)
     seeds = None
     if campaign.seeds is not None:     # sequential seeds: the runs asked for so far, and each case's interval
         from interphase.campaign.sequential import rounds_frame, rounds_of, wanted_ids
@@ -508,7 +512,7 @@ def _status_frame(campaign: Campaign, planned: list[PlannedCase]):
     with st.CampaignStore(campaign.output) as store:
         store.register(planned)
         every = store.status()
-    stale = find_stale(planned, every, engine_builds(p.engine for p in planned))
+    stale = find_stale(planned, every, engine_builds(p.engine_spec for p in planned))
     ids = [p.case_id for p in planned]
     df = every.set_index("case_id").reindex(ids).reset_index()
     for i, cid in enumerate(ids):

@@ -1,7 +1,8 @@
 """The case runner: one Case, one engine, one folder → a finished case (DONE) or a recorded failure.
 
-`run_case(case, engine_name, folder, meta)` is what both executors call (in a pool worker or in a
-SLURM job), and what `campaign crosscheck` reuses. It never raises for an engine failure: the
+`run_case(case, engine, folder, meta)` is what both executors call (in a pool worker or in a
+SLURM job), and what `campaign crosscheck` reuses; `engine` is a value (engines.base.EngineSpec,
+built here, or an Engine), never a name. It never raises for an engine failure: the
 failure goes to failure.json (cause, message, log tail) and the returned status dict. It re-raises
 interruptions (Ctrl-C, SIGTERM, SLURM time-out signals) after recording them, so the caller stops.
 
@@ -24,6 +25,7 @@ from pathlib import Path
 
 from interphase.campaign import store as st
 from interphase.case import Case
+from interphase.engines.base import Engine, EngineSpec, engine_spec
 from interphase.version import __version__
 
 
@@ -119,9 +121,9 @@ def _failure(folder: Path, status: str, cause: str, message: str, started: float
     return data
 
 
-def _start_record(case: Case, engine_name: str, engine, meta: dict, cid: str, started: float) -> dict:
+def _start_record(case: Case, engine: Engine, meta: dict, cid: str, started: float) -> dict:
     """case.json at the start of a run: the case, its engine and recipe, and where it runs."""
-    return {**meta, "case_id": cid, "engine": engine_name, "inputs": case.canonical(), "name": case.name,
+    return {**meta, "case_id": cid, "engine": engine.name, "inputs": case.canonical(), "name": case.name,
             "provenance": {"package": "interphase-dem", "package_version": __version__,
                            "engine_version": engine.version(), "recipe_id": engine.recipe_id(),
                            "host": socket.gethostname(), "pid": os.getpid(), "python": sys.version.split()[0],
@@ -158,9 +160,9 @@ def _record_exception(folder: Path, exc: Exception, stage: str, started: float) 
     return data
 
 
-def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict | None = None, *,
-             engine=None) -> dict:
-    """Run one case in `folder`; returns {case_id, status, cause, message, elapsed, skipped, ...}.
+def run_case(case: Case, engine: EngineSpec | Engine, folder: str | os.PathLike, meta: dict | None = None) -> dict:
+    """Run one case in `folder` with `engine` (an EngineSpec, built here, or an Engine); returns
+    {case_id, status, cause, message, elapsed, skipped, ...}.
 
     Skips a case whose folder already holds DONE. An earlier unfinished attempt's files are removed
     first (its engines, if still alive, are killed by PID); attempts.jsonl keeps the history."""
@@ -176,13 +178,12 @@ def run_case(case: Case, engine_name: str, folder: str | os.PathLike, meta: dict
     started = time.time()
     stage = "setup"
     # a first case.json before anything can fail, so that the folder is always indexable
-    st.write_json_atomic(folder / st.CASE_JSON, {**meta, "case_id": cid, "engine": engine_name,
+    st.write_json_atomic(folder / st.CASE_JSON, {**meta, "case_id": cid, "engine": engine.name,
                                                  "inputs": case.canonical(), "started": started})
     try:
-        if engine is None:
-            from interphase.engines.base import get_engine
-            engine = get_engine(engine_name)
-        record = _start_record(case, engine_name, engine, meta, cid, started)
+        if isinstance(engine, EngineSpec):
+            engine = engine.build()
+        record = _start_record(case, engine, meta, cid, started)
         st.write_json_atomic(folder / st.CASE_JSON, record)
         st.append_attempt(folder, {"event": "start", "time": started, "host": socket.gethostname(),
                                    "pid": os.getpid(), "slurm_job": _slurm_job()})
@@ -272,20 +273,20 @@ def _record_disk_full(folder: Path, stage: str, exc: BaseException, started: flo
     return _failure(folder, "interrupted", "disk_full", message, started, tail, stage=stage)
 
 
-def run_single(case: Case, engine_name: str, folder: str | os.PathLike) -> dict:
-    """One case outside a campaign (`campaign run-case`): `run_case` in `folder`, whose result dict
-    also carries the summary row (read back from summary.json when the folder had already finished).
+def run_single(case: Case, engine: str | EngineSpec, folder: str | os.PathLike) -> dict:
+    """One case outside a campaign (`campaign run-case`): `run_case` in `folder` with `engine` (a
+    name, made into this machine's EngineSpec, or an EngineSpec), whose result dict also carries the
+    summary row (read back from summary.json when the folder had already finished).
 
     The folder is checked first (campaign.guard.check_run_folder): a folder of another case, or a
     non-empty folder that is no case folder, is refused (InputError); this same case's finished
     folder is read back, not rerun."""
     from interphase.campaign.guard import check_run_folder
-    from interphase.engines.base import get_engine
 
     folder = Path(folder)
-    engine = get_engine(engine_name)
-    check_run_folder(folder, case, engine_name, engine.recipe_id())
-    result = run_case(case, engine_name, folder, {"label": case.label()}, engine=engine)
+    engine = engine_spec(engine).build()
+    check_run_folder(folder, case, engine.name, engine.recipe_id())
+    result = run_case(case, engine, folder, {"label": case.label()})
     if result["status"] == "done" and "summary" not in result:
         result["summary"] = st.read_json(folder / st.SUMMARY_JSON)["row"]
     return result

@@ -14,6 +14,7 @@ line, the output files it must leave, its log classifier and the pattern of its 
 from __future__ import annotations
 
 import abc
+import dataclasses
 import functools
 import hashlib
 import json
@@ -29,7 +30,7 @@ from pathlib import Path
 
 from interphase.case import Case
 from interphase.errors import InputError
-from interphase.recipe import RECIPE, Recipe, read_record
+from interphase.recipe import RECIPE, RECIPE_VERSIONS, Recipe, read_record
 from interphase.tables import Results
 
 #: classified causes of an engine failure
@@ -105,10 +106,12 @@ class Engine(abc.ABC):
     template_suffix: str = ""            # of the templates interface_shear<suffix>, direct_shear<suffix>
 
     def __init__(self, profile: EngineProfile | None = None, templates: str | os.PathLike | None = None,
-                 recipe: Recipe = RECIPE):
+                 recipe: Recipe = RECIPE, recipe_version: int | None = None):
         self.profile = profile or self.default_profile()
         self.templates = Path(templates) if templates else template_root() / self.name
         self.recipe = recipe
+        #: this engine's number in interphase.recipe.RECIPE_VERSIONS unless given (recipe_id)
+        self.recipe_version = recipe_version
 
     # -- machine side
     @classmethod
@@ -129,14 +132,13 @@ class Engine(abc.ABC):
 
     def recipe_id(self) -> str:
         """Short SHA-256 of what decides this engine's case folders besides the Case: the engine's
-        name, its number in interphase.recipe.RECIPE_VERSIONS and the Recipe's values. Code and
-        templates are not hashed (a refactor that writes the same inputs keeps every finished case); a
-        change that alters what an engine is given must bump its number, which
-        tests/test_recipe_version.py enforces. The engine binary's version is provenance (case.json),
-        not identity."""
-        from interphase.recipe import RECIPE_VERSIONS
-
-        payload = {"engine": self.name, "version": RECIPE_VERSIONS[self.name], "recipe": self.recipe.to_dict()}
+        name, its recipe version (its number in interphase.recipe.RECIPE_VERSIONS unless the engine
+        was built with another) and the Recipe's values. Code and templates are not hashed (a refactor
+        that writes the same inputs keeps every finished case); a change that alters what an engine is
+        given must bump its number, which tests/test_recipe_version.py enforces. The engine binary's
+        version is provenance (case.json), not identity."""
+        version = RECIPE_VERSIONS[self.name] if self.recipe_version is None else self.recipe_version
+        payload = {"engine": self.name, "version": version, "recipe": self.recipe.to_dict()}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
     # -- the contract
@@ -272,8 +274,8 @@ def register(cls: type[Engine]) -> type[Engine]:
     return cls
 
 
-def get_engine(name: str, **kwargs) -> Engine:
-    """Engine by name ('liggghts' | 'yade')."""
+def engine_class(name: str) -> type[Engine]:
+    """The Engine class of a name ('liggghts' | 'yade'); InputError for another."""
     import importlib
 
     if name not in _REGISTRY:
@@ -283,7 +285,51 @@ def get_engine(name: str, **kwargs) -> Engine:
             pass
     if name not in _REGISTRY:
         raise InputError(f"unknown engine {name!r}", where="engine", fix="use liggghts or yade")
-    return _REGISTRY[name](**kwargs)
+    return _REGISTRY[name]
+
+
+def get_engine(name: str, **kwargs) -> Engine:
+    """Engine by name ('liggghts' | 'yade')."""
+    return engine_class(name)(**kwargs)
+
+
+@dataclass(frozen=True)
+class EngineSpec:
+    """An engine as a value: its class, this machine's profile, the Recipe and the recipe version
+    (with `options`, further keyword arguments of the class). Frozen and picklable (the class by
+    reference), so that it travels from the plan to the executors' workers (a pool's spawned
+    processes, SLURM jobs), which build the very engine the plan's ids were hashed with
+    (`build()`) instead of looking a name up again. `engine_spec(name)` makes the one a name
+    stands for; a test passes another (a bumped recipe version, a test-only engine class)."""
+
+    cls: type[Engine]
+    profile: EngineProfile
+    recipe: Recipe = RECIPE
+    recipe_version: int = 0
+    options: tuple[tuple[str, object], ...] = ()
+
+    @property
+    def name(self) -> str:
+        return self.cls.name
+
+    def build(self) -> Engine:
+        return self.cls(profile=self.profile, recipe=self.recipe, recipe_version=self.recipe_version,
+                        **dict(self.options))
+
+    def recipe_id(self) -> str:
+        """The recipe id of the engine it builds (Engine.recipe_id); runs no binary."""
+        return self.build().recipe_id()
+
+
+def engine_spec(engine: "str | EngineSpec", **changes) -> EngineSpec:
+    """The EngineSpec a name stands for on this machine: its registered class, its profile from the
+    environment (EngineProfile.from_env), the Recipe and its RECIPE_VERSIONS number; `changes`
+    replace fields. An EngineSpec is returned as it is (with `changes` applied)."""
+    if isinstance(engine, EngineSpec):
+        return dataclasses.replace(engine, **changes) if changes else engine
+    cls = engine_class(engine)
+    spec = EngineSpec(cls, cls.default_profile(), RECIPE, RECIPE_VERSIONS[cls.name])
+    return dataclasses.replace(spec, **changes) if changes else spec
 
 
 def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: str) -> int:

@@ -541,8 +541,9 @@ def _clean(d: dict) -> dict:
 
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
-                 n_boot: int = 199, output: str | Path | None = None) -> ReportResult:
-    campaign, store, summ = open_campaign(campaign_path, output)
+                 n_boot: int = 199, output: str | Path | None = None, engines=None) -> ReportResult:
+    """The report of a campaign's finished runs (`engines`: as results.open_campaign)."""
+    campaign, store, summ = open_campaign(campaign_path, output, engines)
     try:
         res = report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
                                     lab=lab, n_boot=n_boot)
