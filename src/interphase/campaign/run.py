@@ -17,6 +17,9 @@ another recipe (a recipe change gives new ids); (engine build) finished, but by 
 engine than this machine's, when this machine's can be told. Stale cases are kept as they are and
 listed; `rerun_stale` runs them: under this recipe in a new folder (the old one stays), or, for an
 engine build, again in the same folder after the old one is moved to `<output>/.superseded/`.
+
+A round of a run is a Selection (`select`: what each planned case gets — run, finished, kept, stale —
+decided from the index and printed before anything is touched), then its execution (`_execute`).
 """
 
 from __future__ import annotations
@@ -118,23 +121,66 @@ def find_stale(planned: list[PlannedCase], rows, builds: dict) -> dict[str, Stal
     return out
 
 
-def _select(planned: list[PlannedCase], store: st.CampaignStore, rerun_failed: bool, stale: dict,
-            rerun_stale: bool):
-    """(to run, done, kept, stale kept) after store.reconcile(): kept = failed, killed or corrupt
-    without rerun_failed; stale kept = stale cases without rerun_stale."""
+@dataclass
+class Selection:
+    """What a round of `campaign run` does with each planned case, decided from the index before
+    anything is touched (`select`): printed (`lines`), then executed. `run`: the cases to run;
+    `done`: finished; `kept`: failed, killed or corrupt, kept without rerun_failed; `kept_stale`:
+    stale (find_stale), kept without rerun_stale; `states`: {case id: folder state} of the kept
+    ones; `corrupt`: ids of the cases to run whose finished folder is corrupt (discarded first)."""
+
+    run: list[PlannedCase]
+    done: list[PlannedCase]
+    kept: list[PlannedCase]
+    kept_stale: list[PlannedCase]
+    stale: dict[str, Stale]
+    states: dict[str, str]
+    corrupt: set[str]
+
+    def statuses(self) -> dict[str, str]:
+        """{case id: status} of the cases that do not run: an earlier recipe's result is not this
+        recipe's ('stale'); another engine build's is ('done')."""
+        out = {p.case_id: "done" for p in self.done} | {p.case_id: self.states[p.case_id] for p in self.kept}
+        return out | {p.case_id: "stale" if self.stale[p.case_id].kind == "recipe" else "done" for p in self.kept_stale}
+
+    def lines(self, name: str, executor: str, output) -> list[str]:
+        """What `campaign run` says before it runs anything."""
+        n = len(self.run) + len(self.done) + len(self.kept) + len(self.kept_stale)
+        out = [f"campaign {name}: {n} cases, {len(self.done)} finished, {len(self.kept)} failed (kept; "
+               "--rerun-failed reruns them), " + (f"{len(self.kept_stale)} stale (kept; --rerun-stale reruns "
+                                                  "them), " if self.kept_stale else "")
+               + f"{len(self.run)} to run [{executor}] → {output}"]
+        corrupt = sum(1 for p in self.kept if self.states[p.case_id] == "corrupt")
+        if corrupt:
+            out.append(f"campaign {name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
+                       "status`); --rerun-failed reruns them")
+        kinds = sorted({self.stale[p.case_id].kind for p in self.kept_stale})
+        if kinds:
+            out.append(f"campaign {name}: stale = finished under another {' or '.join(kinds)} "
+                       "(`campaign status` lists them)")
+        return out
+
+
+def select(planned: list[PlannedCase], store: st.CampaignStore, builds: dict, rerun_failed: bool,
+           rerun_stale: bool) -> Selection:
+    """The Selection of `planned` after store.reconcile(); reads the index, writes nothing."""
+    stale = find_stale(planned, store.status(), builds)
     indexed = store.statuses()
-    run, done, failed, kept_stale = [], [], [], []
+    sel = Selection([], [], [], [], stale, {}, set())
     for p in planned:
         fs = _state(store, indexed, p.case_id)
         if p.case_id in stale:
-            (run if rerun_stale else kept_stale).append(p)
+            (sel.run if rerun_stale else sel.kept_stale).append(p)
         elif fs == "done":
-            done.append(p)
+            sel.done.append(p)
         elif fs in st.KEPT_STATUSES and not rerun_failed:
-            failed.append(p)
+            sel.kept.append(p)
+            sel.states[p.case_id] = fs
         else:
-            run.append(p)
-    return run, done, failed, kept_stale
+            sel.run.append(p)
+            if fs == "corrupt":
+                sel.corrupt.add(p.case_id)
+    return sel
 
 
 def _supersede(store: st.CampaignStore, case_id: str) -> Path:
@@ -231,45 +277,29 @@ def run_campaign(path, *, engines=None, executor: str | None = None, jobs: int |
 
 def _run_round(campaign: Campaign, planned: list[PlannedCase], store: st.CampaignStore, report: RunReport,
                executor: str, jobs, stream, live, builds: dict, *, rerun_failed: bool, rerun_stale: bool) -> list:
-    """Run what of `planned` is not finished (the campaign's lock held); returns the runs it started
-    (empty: nothing was left to run). Statuses and counts go into `report`."""
+    """Run what of `planned` is not finished (the campaign's lock held): its Selection, printed,
+    then executed; returns the runs it started (empty: nothing was left to run). Statuses and counts
+    go into `report`."""
     store.register(planned)
     store.reconcile(stale_running=True)   # we hold the lock: nothing of this campaign is running
-    stale = find_stale(planned, store.status(), builds)
-    todo, done, failed, kept_stale = _select(planned, store, rerun_failed, stale, rerun_stale)
-    report.skipped_done, report.skipped_failed = len(done), len(failed)
-    for p in done:
-        report.statuses[p.case_id] = "done"
-    indexed = store.statuses()
-    for p in failed:
-        report.statuses[p.case_id] = _state(store, indexed, p.case_id)
-    for p in kept_stale:    # an earlier recipe's result is not this recipe's; another build's is
-        report.statuses[p.case_id] = "stale" if stale[p.case_id].kind == "recipe" else "done"
-    corrupt = sum(1 for p in failed if report.statuses[p.case_id] == "corrupt")
-    print(f"campaign {campaign.name}: {len(planned)} cases, {len(done)} finished, "
-          f"{len(failed)} failed (kept; --rerun-failed reruns them), "
-          + (f"{len(kept_stale)} stale (kept; --rerun-stale reruns them), " if kept_stale else "")
-          + f"{len(todo)} to run [{executor}] → {campaign.output}", file=stream, flush=True)
-    if corrupt:
-        print(f"campaign {campaign.name}: {corrupt} finished case(s) are corrupt and not used (see `campaign "
-              "status`); --rerun-failed reruns them", file=stream, flush=True)
-    kinds = sorted({stale[p.case_id].kind for p in kept_stale})
-    if kinds:
-        print(f"campaign {campaign.name}: stale = finished under another {' or '.join(kinds)} "
-              "(`campaign status` lists them)", file=stream, flush=True)
-    for p in todo:
-        if p.case_id in stale and stale[p.case_id].kind == "engine build":
+    sel = select(planned, store, builds, rerun_failed, rerun_stale)
+    report.skipped_done, report.skipped_failed = len(sel.done), len(sel.kept)
+    report.statuses.update(sel.statuses())
+    for line in sel.lines(campaign.name, executor, campaign.output):
+        print(line, file=stream, flush=True)
+    for p in sel.run:
+        if p.case_id in sel.stale and sel.stale[p.case_id].kind == "engine build":
             dest = _supersede(store, p.case_id)
-            print(f"rerun stale {p.case_id} ({p.label}): {stale[p.case_id].message.split(':')[0]}; "
+            print(f"rerun stale {p.case_id} ({p.label}): {sel.stale[p.case_id].message.split(':')[0]}; "
                   f"old folder → {dest}", file=stream, flush=True)
-    for p in todo:
-        if indexed.get(p.case_id) == "corrupt" and _state(store, indexed, p.case_id) == "corrupt":
+    for p in sel.run:
+        if p.case_id in sel.corrupt:
             row = store.row(p.case_id) or {}
             print(f"rerun corrupt {p.case_id} ({p.label}): {row.get('message')}", file=stream, flush=True)
             st.discard_corrupt(store.case_folder(p.case_id), row.get("cause"), row.get("message"))
-    if todo:
-        _execute(campaign, todo, store, report, executor, jobs, stream, live)
-    return todo
+    if sel.run:
+        _execute(campaign, sel.run, store, report, executor, jobs, stream, live)
+    return sel.run
 
 
 def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStore, report: RunReport,
