@@ -184,7 +184,7 @@ def _predicted(row, tan_phi: float) -> tuple[float, str]:
     x = np.arange(0, reps * p.length, dx)
     y = np.arange(0, reps * q.length, case.d50 / 4)
     Z = np.interp(x % p.length, p.x, p.z)[None, :] + np.interp(y % q.length, q.x, q.z)[:, None]
-    res = theta_a_lines(y, Z, case.d50, filters=(92,), dx=dx)["+"][92]
+    res = theta_a_lines(x, Z, case.d50, filters=(92,), dx=dx)["+"][92]
     model = criterion_model(case.friction_ps, None, tan_phi)
     pr = predict(model, case.friction_ps, res.theta_a_deg, math.nan)
     return res.theta_a_deg, f"{pr.efficiency:.2f} ({pr.efficiency_interval[0]:.2f}–{pr.efficiency_interval[1]:.2f}) at θr {pr.theta_r_deg:.1f}°"
