@@ -69,18 +69,24 @@ def load(campaign: Path, save: Path | None):
     return summ, store
 
 
-def _log_se(a: np.ndarray, b: np.ndarray) -> float:
-    """Standard error of ln(mean a / mean b) (delta method), a, b independent seed values."""
-    return math.sqrt(a.var(ddof=1) / (a.size * a.mean() ** 2) + b.var(ddof=1) / (b.size * b.mean() ** 2))
+def _log_terms(a: np.ndarray, b: np.ndarray) -> list[tuple[float, int]]:
+    """(variance term, seeds) of ln(mean a / mean b) by the delta method, one per side."""
+    return [(v.var(ddof=1) / (v.size * v.mean() ** 2), v.size) for v in (a, b)]
 
 
 def e_difference(a1, b1, a2, b2) -> tuple[float, float, float, str]:
-    """E2 − E1 with its 95 % interval and verdict (E = mean a / mean b per side)."""
+    """E2 − E1 with its 95 % interval and verdict (E = mean a / mean b per device, the four seed
+    groups independent): each E's delta-method variance on the log, scaled by E², added; Student t
+    with Welch–Satterthwaite degrees of freedom, as the report's E interval (docs/methods.md)."""
+    if min(v.size for v in (a1, b1, a2, b2)) < 2:
+        return math.nan, math.nan, math.nan, "undecided"
     e1, e2 = a1.mean() / b1.mean(), a2.mean() / b2.mean()
-    se = math.hypot(e1 * _log_se(a1, b1), e2 * _log_se(a2, b2))
-    t = stats.t.ppf(0.975, min(a1.size, a2.size) - 1)
+    terms = [(e1 ** 2 * v, n) for v, n in _log_terms(a1, b1)] + [(e2 ** 2 * v, n) for v, n in _log_terms(a2, b2)]
+    var = sum(v for v, _ in terms)
+    df = var ** 2 / sum(v ** 2 / (n - 1) for v, n in terms if v > 0) if var > 0 else 1.0
+    h = stats.t.ppf(0.975, df) * math.sqrt(var)
     d = e2 - e1
-    return d, d - t * se, d + t * se, verdict(d - t * se, d + t * se, TOL_E)
+    return d, d - h, d + h, verdict(d - h, d + h, TOL_E)
 
 
 def _fmt(v, lo, hi, nd=3) -> str:
@@ -178,7 +184,7 @@ def _predicted(row, tan_phi: float) -> tuple[float, str]:
     x = np.arange(0, reps * p.length, dx)
     y = np.arange(0, reps * q.length, case.d50 / 4)
     Z = np.interp(x % p.length, p.x, p.z)[None, :] + np.interp(y % q.length, q.x, q.z)[:, None]
-    res = theta_a_lines(y, Z, case.d50, filters=(92,), dx=dx)["+"][92]
+    res = theta_a_lines(x, Z, case.d50, filters=(92,), dx=dx)["+"][92]
     model = criterion_model(case.friction_ps, None, tan_phi)
     pr = predict(model, case.friction_ps, res.theta_a_deg, math.nan)
     return res.theta_a_deg, f"{pr.efficiency:.2f} ({pr.efficiency_interval[0]:.2f}–{pr.efficiency_interval[1]:.2f}) at θr {pr.theta_r_deg:.1f}°"
