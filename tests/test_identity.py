@@ -98,3 +98,24 @@ def test_the_report_uses_one_recipe_per_engine_and_counts_what_it_left_out(tmp_p
     assert out.attrs["recipes"] == {"liggghts": "old-recipe"} and out.attrs["current"] == {"liggghts": False}
     assert any("no finished run of this version's recipe; the report uses recipe old-recipe" in n
                for n in recipe_notes(out.attrs))
+
+
+def test_a_run_takes_the_group_the_file_gives_its_case_now(tmp_path):
+    """A file reorganised into groups (same cases, same ids) must not split a case's seeds between
+    the group its first runs were planned under and the new one: the summaries take the file's."""
+    from interphase.campaign.plan import plan
+    from interphase.campaign.results import one_run_per_case
+    from interphase.campaign.schema import load_campaign
+
+    f = tmp_path / "c.toml"
+    f.write_text('[campaign]\nname = "c"\nengines = ["liggghts"]\n[case]\ntest = "interface"\n'
+                 'profile = {kind = "flat"}\nn_grains = 50\n[pairs]\nbox = false\n'
+                 '[[group]]\nname = "now"\n[group.sweep]\nseed = [1, 2]\n')
+    c = load_campaign(f)
+    a, b = plan(c, identity=lambda name: "r")
+    rows = pd.DataFrame([dict(case_id=a.case_id, label=a.label, engine="liggghts", finished=1.0, recipe_id="r",
+                              group="c"),            # planned when the file had no groups
+                         dict(case_id=b.case_id, label=b.label, engine="liggghts", finished=2.0, recipe_id="r",
+                              group="now")])
+    out = one_run_per_case(rows, c, identity=lambda name: "r")
+    assert list(out["group"]) == ["now", "now"]

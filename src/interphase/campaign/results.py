@@ -131,6 +131,11 @@ def one_run_per_case(summaries: pd.DataFrame, campaign, **plan_options) -> pd.Da
     out = pd.concat(keep).sort_index() if keep else asked
     attrs["other_recipe"] = len(asked) - len(out)
     out = with_physical_ids(out.drop(columns="_recipe"), planned)
+    # the group is the file's as it reads now: a file reorganised into groups keeps each case's
+    # seeds together (the index keeps the group a run was planned under)
+    group = {(p.label, p.engine): p.group for p in planned}
+    out["group"] = [group.get(k, g) for k, g in zip(zip(out["label"].astype(str), out["engine"].astype(str)),
+                                                     out["group"] if "group" in out else [None] * len(out))]
     out.attrs.update(attrs)
     return out
 
