@@ -33,9 +33,13 @@ from sequential_coverage import REPRO, _running, apply_rule, draws, populations 
 from interphase.analysis.ensemble import ratio_interval  # noqa: E402
 
 
-def run_times() -> tuple[dict[str, float], float, float, int]:
-    """(mean run time [s] per physical case, mean box run time [s], today's core-hours, runs)."""
+def run_times(group: str | None = None) -> tuple[dict[str, float], float, float, int]:
+    """(mean run time [s] per physical case, mean box run time [s], today's core-hours, runs), of one
+    group and its soil's box tests when `group` is given."""
     s = pd.read_csv(REPRO / "summaries.csv")
+    if group:
+        mine = s[s["group"] == group]
+        s = pd.concat([mine, s[(s["test"] == "box") & s["gradation"].isin(mine["gradation"])]])
     s["_case"] = s["label"].str.replace(r"-s\d+$", "", regex=True)
     iface = s[s["test"] == "interface"]
     return (iface.groupby("_case")["elapsed"].mean().to_dict(), float(s.loc[s["test"] == "box", "elapsed"].mean()),
@@ -68,6 +72,9 @@ def main(argv=None) -> None:
     ap.add_argument("--trials", type=int, default=4000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--ensembles", type=Path, help="write today's ensembles table here (CSV)")
+    ap.add_argument("--group", help="project one group of the study only (e.g. group1), its soil's box seeds with it")
+    ap.add_argument("--only", nargs=4, metavar=("QUANTITY", "HALFWIDTH", "CAP", "M"),
+                    help="one setting instead of the table's, e.g. --only E 0.1 24 20")
     args = ap.parse_args(argv)
     if args.ensembles:
         from sequential_coverage import _Curves
@@ -80,18 +87,20 @@ def main(argv=None) -> None:
         print(f"today's ensembles ({len(table)} physical cases) → {args.ensembles}: E half-width median "
               f"{half.median():.3f}; within ± 0.05 {np.mean(half <= 0.05):.0%}, ± 0.1 {np.mean(half <= 0.1):.0%}")
     rng = np.random.default_rng(args.seed)
-    pops = populations()
-    times, box_time, today, runs = run_times()
-    print(f"today: {runs} runs (3 seeds a case, 10 a soil), {today:.1f} core-hours, {today / 2:.1f} h on 2 cores")
+    pops = [p for p in populations() if args.group in (None, p["group"])]
+    times, box_time, today, runs = run_times(args.group)
+    soils = len({p["b"].tobytes() for p in pops})
+    print(f"today{' (' + args.group + ')' if args.group else ''}: {runs} runs (3 seeds a case, 10 a soil), "
+          f"{today:.1f} core-hours, {today / 2:.1f} h on 2 cores")
     print(f"{'target':<14} {'cap':>4} {'soil m':>6} {'cases reaching':>15} {'mean seeds':>10} {'core-h':>7} {'x today':>8}")
-    for quantity, target in (("E", 0.05), ("E", 0.1), ("tan_delta", 0.05), ("tan_delta", 0.02)):
-        for cap, m in ((12, 10), (12, 40), (24, 40), (24, 80)):
-            if quantity == "tan_delta" and m != 10:
-                continue
-            r = project(pops, times, quantity, target, cap, m, args.trials, rng)
-            h = r["hours"] + 2 * m * box_time / 3600
-            print(f"{quantity + ' ± ' + format(target, 'g'):<14} {cap:>4} {m:>6} {r['reached']:>15.0%} "
-                  f"{r['seeds']:>10.1f} {h:>7.1f} {h / today:>8.1f}")
+    settings = ([(args.only[0], float(args.only[1]), int(args.only[2]), int(args.only[3]))] if args.only else
+                [(q, t, cap, m) for q, t in (("E", 0.05), ("E", 0.1), ("tan_delta", 0.05), ("tan_delta", 0.02))
+                 for cap, m in ((12, 10), (12, 40), (24, 40), (24, 80)) if q == "E" or m == 10])
+    for quantity, target, cap, m in settings:
+        r = project(pops, times, quantity, target, cap, m, args.trials, rng)
+        h = r["hours"] + soils * m * box_time / 3600
+        print(f"{quantity + ' ± ' + format(target, 'g'):<14} {cap:>4} {m:>6} {r['reached']:>15.0%} "
+              f"{r['seeds']:>10.1f} {h:>7.1f} {h / today:>8.1f}")
 
 
 if __name__ == "__main__":
