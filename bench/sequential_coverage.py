@@ -8,9 +8,9 @@ seeds; the case's "truth" is its full-data value (mean tan δ; E = mean tan δ /
 draws seeds one by one and applies the rule exactly as campaign run does: seeds 1..start, then +step
 while the 95 % interval's half-width (t interval for tan δ; analysis.ensemble.ratio_interval for E,
 the box side on max(10, n) seeds as [pairs] seeds = 1-10 and the paired seeds give) is wider than the
-target, up to max; once the half-width first reaches the target, one more round (campaign.sequential.
-CONFIRM) and stop there whatever the interval reads (rows "+1 after": the rule campaign run uses;
-rows without it: the plain rule, for comparison). Coverage = share of trials whose final 95 %
+target, up to max; a case within the target runs one more round (campaign.sequential.CONFIRM) and
+stops when that round reads within too, else it goes on (rows "two in a row": the rule campaign run
+uses; rows without it: the plain rule, stopping on the first reading within, for comparison). Coverage = share of trials whose final 95 %
 interval contains the truth; "worst" the lowest case's coverage; "seeds" the mean seeds used;
 "reached" the share of trials stopping at the target rather than at the cap.
 
@@ -122,11 +122,15 @@ def intervals(pop: dict, quantity: str, ns: np.ndarray, trials: int, rng, how: s
 
 
 def apply_rule(lo, hi, ns, target: float, extra: int = 0) -> np.ndarray:
-    """Column index (into ns) where the rule stops each trial: the first n with half-width ≤ target,
-    else the last; `extra` more rounds after the target is reached (capped)."""
+    """Column index (into ns) where the rule stops each trial: the first n whose half-width is within
+    the target on `extra` + 1 rounds in a row (campaign.sequential: extra = CONFIRM = 1), else the
+    last (the cap)."""
     ok = (hi - lo) / 2 <= target
-    first = np.where(ok.any(axis=1), ok.argmax(axis=1), ns.size - 1)
-    return np.minimum(first + np.where(ok.any(axis=1), extra, 0), ns.size - 1)
+    run = ok.copy()
+    for i in range(1, extra + 1):
+        run[:, i:] &= ok[:, :-i]
+        run[:, :i] = False
+    return np.where(run.any(axis=1), run.argmax(axis=1), ns.size - 1)
 
 
 def coverage(pops, quantity, start, cap, step, target, trials, rng, how, pools, extra=0) -> dict:
@@ -167,7 +171,7 @@ def main(argv=None) -> None:
             for extra in (0, 1):
                 rng = np.random.default_rng(args.seed)
                 r = coverage(pops, q, start, cap, step, target, args.trials, rng, how, pools, extra)
-                rule = f"start {start}, max {cap}, step {step}" + (", +1 after" if extra else "")
+                rule = f"start {start}, max {cap}, step {step}" + (", two in a row" if extra else "")
                 print(f"{how:<9} {q:<10} {rule:<33} {target:>6g} {r['coverage']:>9.3f} {r['worst_case']:>6.3f} "
                       f"{r['mean_seeds']:>6.2f} {r['reached']:>8.3f} {r['fixed_start']:>14.3f} {r['fixed_cap']:>12.3f}",
                       flush=True)

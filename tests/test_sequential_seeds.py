@@ -134,6 +134,17 @@ def test_rounds_add_seeds_only_where_the_interval_is_wide():
     assert (r["narrow"].n, r["narrow"].wanted, r["narrow"].state) == (5, 5, "reached")   # 3, then 5 to confirm
 
 
+def test_a_confirming_round_that_reads_wide_goes_on_adding_seeds():
+    """Within the target at 3 seeds (± 0.025), the 4th seed an outlier (± 0.081 at 4): the case does
+    not stop on the wide reading but adds seeds until two rounds in a row read within (± 0.043 at
+    the cap, 6); a case that stops before the cap always reports an interval within the target."""
+    rule = SeedRule(start=3, max=6, step=1, quantity="tan_delta", halfwidth=0.05)
+    evaluate = _named(_t_eval({"relapse": [0.50, 0.51, 0.49, 0.60, 0.50, 0.50]}))
+    states = [(r.wanted, r.state, round(r.halfwidth, 3))
+              for r in (_replay(rule, {"relapse": set(range(1, n + 1))}, evaluate)["relapse"] for n in (3, 4, 5, 6))]
+    assert states == [(4, "confirming", 0.025), (5, "adding", 0.081), (6, "adding", 0.056), (6, "reached", 0.043)]
+
+
 def test_cap_notes_name_only_the_cases_that_stopped_at_the_cap():
     import pandas as pd
 
@@ -154,25 +165,31 @@ def _status(f: Path) -> dict:
 
 
 @pytest.mark.liggghts
-def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
-    """Two physical cases with E as the target. Round 1 (seeds 1–3, cap 3: no interval below 3 seeds)
-    gives each its E interval; then the target is set between the two half-widths and the cap raised
-    to 5: the narrow case runs its one confirming seed (4) and stops, the wide one goes on to seed 5
-    (with its soil test of each seed); nothing finished is rerun, and a rerun runs nothing."""
+def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_case_still_wide(tmp_path):
+    """Two physical cases with E as the target. Seeds 1–3, then 4 (the cap at 3, then at 4, with an
+    unreachable target) give each case its E interval at 3 and at 4 seeds. Then the target is set
+    between the two 4-seed readings, above both 3-seed ones, and the cap raised to 5: the rounds
+    replay from the finished runs; both cases read within at 3 and run a confirming seed 4; the one
+    that reads within again stops there, the one whose 4th seed widened it goes on to seed 5 (with
+    its soil test); nothing finished is rerun, and a rerun runs nothing."""
     need_binary("liggghts")
     f = tmp_path / "seq.toml"
-    f.write_text(BASE + SEEDS.format(max=3, h=1e-9))
-    assert main(["run", str(f), "--plain"]) == 0
-    first = {r["case"]: r for r in _status(f)["seeds"]}
-    assert {(r["finished"], r["wanted"], r["state"]) for r in first.values()} == {(3, 3, "capped")}
-    halves = {k: r["halfwidth"] for k, r in first.items()}
-    wide, narrow = sorted(halves, key=halves.get, reverse=True)
-    assert halves[wide] > halves[narrow] > 0
+    halves = {}
+    for cap in (3, 4):
+        f.write_text(BASE + SEEDS.format(max=cap, h=1e-9))
+        assert main(["run", str(f), "--plain"]) == 0
+        status = {r["case"]: r for r in _status(f)["seeds"]}
+        assert {(r["finished"], r["wanted"], r["n"], r["state"]) for r in status.values()} == {(cap, cap, cap, "capped")}
+        for case, r in status.items():
+            halves.setdefault(case, []).append(r["halfwidth"])
+    narrow, wide = sorted(halves, key=lambda c: halves[c][1])
+    target = (halves[narrow][1] + halves[wide][1]) / 2
+    assert max(halves[narrow][0], halves[wide][0]) <= target, f"a 3-seed reading is wider than the target: {halves}"
     out = tmp_path / "out"
     done_before = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
-    assert len(done_before) == 9                   # 2 cases × 3 seeds + the 3 soil tests
+    assert len(done_before) == 12                  # 2 cases × 4 seeds + the 4 soil tests
 
-    f.write_text(BASE + SEEDS.format(max=5, h=(halves[wide] + halves[narrow]) / 2))
+    f.write_text(BASE + SEEDS.format(max=5, h=target))
     assert main(["run", str(f), "--plain"]) == 0
     status = _status(f)
     seeds = {r["case"]: r for r in status["seeds"]}
@@ -181,7 +198,6 @@ def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_wide_case(tmp_path):
     assert seeds[wide]["state"] in ("reached", "capped")
     labels = [r["label"] for r in status["cases"]]
     box = "box-periodic-box-mu0.9-mono"
-    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{narrow}-s4", f"{box}-s4"])
     assert sorted(lb for lb in labels if lb.endswith("-s5")) == sorted([f"{wide}-s5", f"{box}-s5"])
     after = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
     assert len(after) == 14 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
