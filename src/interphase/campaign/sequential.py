@@ -38,7 +38,7 @@ from interphase.campaign.results import with_physical_ids
 
 #: rounds a case runs once its interval is within the target, which must read within too before it
 #: stops: stopping on one reading covered 92.4 % (nominal 95 %) at tan δ ± 0.02 in
-#: bench/sequential_coverage.py, two in a row 93.4 % or more in every setting checked (docs/methods.md)
+#: bench/sequential_coverage.py, two in a row 93.3 % or more in every setting checked (docs/methods.md)
 CONFIRM = 1
 
 #: a physical case's key: (engine, group, physical_id)
