@@ -5,8 +5,8 @@ Ingredients, all measured: each physical case's seed scatter (the populations of
 bench/sequential_coverage.py: interface seeds' peak states, the soil's 10 box seeds) and each run's
 wall time on this machine (`elapsed` of docs/reproduction/summaries.csv: one run on one core, two at
 a time on the 2-core VM). Per case, 4000 trials draw seeds from Normal(case mean, case sd) and apply
-the rule campaign run applies (start 3, step 1, within the target two rounds in a row, a cap), with the soil measured
-on a fixed number of box seeds m (`[pairs] seeds`, shared by every case on that soil). Reported:
+the rule campaign run applies (start 3, step 1, within the target two rounds in a row, a cap), with
+the soil measured on a fixed number of box seeds m (`[pairs] seeds`, shared by every case on that soil). Reported:
 the share of physical cases whose final interval reaches the target (mean over trials), the mean
 interface seeds, and the core-hours: Σ over cases of mean seeds × the case's mean run time, plus
 m × the mean box run time for each of the two soils. A projection, not a run of the study.

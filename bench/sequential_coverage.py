@@ -10,9 +10,9 @@ while the 95 % interval's half-width (t interval for tan δ; analysis.ensemble.r
 the box side on max(10, n) seeds as [pairs] seeds = 1-10 and the paired seeds give) is wider than the
 target, up to max; a case within the target runs one more round (campaign.sequential.CONFIRM) and
 stops when that round reads within too, else it goes on (rows "two in a row": the rule campaign run
-uses; rows without it: the plain rule, stopping on the first reading within, for comparison). Coverage = share of trials whose final 95 %
-interval contains the truth; "worst" the lowest case's coverage; "seeds" the mean seeds used;
-"reached" the share of trials stopping at the target rather than at the cap.
+uses; rows without it: the plain rule, stopping on the first reading within, for comparison).
+Coverage = share of trials whose final 95 % interval contains the truth; "worst" the lowest case's
+coverage; "seeds" the mean seeds used; "reached" the share of trials stopping at the target rather than at the cap.
 
 Three ways of drawing a seed (the study has only 3 interface seeds per case):
   - normal: Normal(case mean, case sd) (the soil's from its 10 seeds). The fixed-n t interval is

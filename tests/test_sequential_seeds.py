@@ -179,7 +179,8 @@ def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_case_still_wide(tmp_p
         f.write_text(BASE + SEEDS.format(max=cap, h=1e-9))
         assert main(["run", str(f), "--plain"]) == 0
         status = {r["case"]: r for r in _status(f)["seeds"]}
-        assert {(r["finished"], r["wanted"], r["n"], r["state"]) for r in status.values()} == {(cap, cap, cap, "capped")}
+        assert {(r["finished"], r["wanted"], r["n"], r["state"]) for r in status.values()} == {
+            (cap, cap, cap, "capped")}
         for case, r in status.items():
             halves.setdefault(case, []).append(r["halfwidth"])
     narrow, wide = sorted(halves, key=lambda c: halves[c][1])
@@ -198,6 +199,7 @@ def test_a_tiny_sequential_campaign_adds_seeds_only_to_the_case_still_wide(tmp_p
     assert seeds[wide]["state"] in ("reached", "capped")
     labels = [r["label"] for r in status["cases"]]
     box = "box-periodic-box-mu0.9-mono"
+    assert sorted(lb for lb in labels if lb.endswith("-s4")) == sorted([f"{wide}-s4", f"{narrow}-s4", f"{box}-s4"])
     assert sorted(lb for lb in labels if lb.endswith("-s5")) == sorted([f"{wide}-s5", f"{box}-s5"])
     after = {p.name: (p / "DONE").stat().st_mtime_ns for p in out.iterdir() if (p / "DONE").exists()}
     assert len(after) == 14 and all(after[k] == v for k, v in done_before.items())  # nothing finished reran
