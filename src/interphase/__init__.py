@@ -13,6 +13,7 @@ The Python API (interphase.api; the `campaign` command does the same):
     ip.element("soils/NAME.toml", 100e3, seeds=3)   # the soil's φ_peak, φ_cs, ψ_max (docs/soils.md)
     ip.calibrate("TARGET.toml")                     # grain parameters from a laboratory soil → a card
     ip.validate("lab/FILE.csv", soil="soils/NAME.toml")   # the criterion against laboratory tests
+    ip.lab_record("lab/soils/ottawa-f65/FILE.csv")  # a laboratory triaxial record: φ_peak, ψ_max, end
 An example that runs end to end: docs/api_example.py.
 
 Units are SI inside the code (m, N, Pa, s, radians); profile generators take sizes in D50 units.
@@ -21,11 +22,11 @@ toward −x, the shear-resisting side); public outputs name which reading they c
 Bad input raises interphase.errors.InputError (the file, the field and the fix).
 """
 
-from interphase.api import (calibrate, element, ensembles, load_campaign, plan, predict, run, status, summaries,
-                            validate)
+from interphase.api import (calibrate, element, ensembles, lab_record, load_campaign, plan, predict, run, status,
+                            summaries, validate)
 from interphase.errors import InputError
 from interphase.version import __version__
 
 __all__ = ["load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "element", "calibrate",
-           "validate", "InputError",
+           "validate", "lab_record", "InputError",
            "__version__"]

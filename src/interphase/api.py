@@ -8,6 +8,7 @@
     df = ip.summaries(c)                                   # DataFrame, one row per finished run
     ens = ip.ensembles(c)                                  # DataFrame, one row per physical case
     p = ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # dict: θa → θr → E → tan δ
+    r = ip.lab_record("lab/soils/karlsruhe-fine-sand/drained-triaxial/TMD11.dat")   # dict: φ_peak, ψ_max, …
 
 Every function takes a campaign file's path or a loaded `Campaign`, and `runs=` where the runs
 folder is not the one the file names (`--runs` of the command). Units are SI in every table
@@ -220,3 +221,19 @@ def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = N
     files = [out / "validation.csv", out / "skill.csv", out / "validation.md", *validation_figure(df, out)]
     return {"lab": str(table.path), "rows": len(df), "folder": out, "notes": notes, "table": df, "skill": sk,
             "largest_miss": largest_miss(df), "files": files}
+
+
+def lab_record(path: PathLike, *, e0: float | None = None) -> dict:
+    """One laboratory drained triaxial record (lab/soils/*/: Karlsruhe .dat, Ottawa F-65 .csv) read
+    and summarised as `campaign lab-record` prints it: the record's start (e0, σ3′ [Pa], layout,
+    rows) and its ShearState (φ_peak, ε1 at peak, ψ_max, end state; definitions in
+    interphase.analysis.triaxial). A record that cannot be read raises InputError naming the file,
+    the line and the column."""
+    from interphase.analysis.triaxial import shear_state
+    from interphase.io.lab_triaxial import read_triaxial
+
+    rec = read_triaxial(path, e0=e0)
+    t = rec.table
+    state = shear_state(t.eps1, t.epsv, t.ratio, t.e)
+    return ({"file": str(rec.path), "layout": rec.layout, "rows": len(t), "e0": rec.e0,
+             "sigma3_start": rec.sigma3_start} | state.to_dict())

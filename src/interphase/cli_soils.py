@@ -41,6 +41,12 @@ def add_soils(sub, print_json) -> None:
     _run_options(p)
     p.set_defaults(func=lambda a: _cmd_validate(a, print_json))
 
+    p = sub.add_parser("lab-record", help="a laboratory drained triaxial record (lab/soils/): φ_peak, ε1 at peak, "
+                       "ψ_max and the end state (docs/soils.md, Laboratory records)")
+    p.add_argument("files", nargs="+", metavar="FILE", help="record(s): Karlsruhe .dat or Ottawa F-65 .csv")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=lambda a: _cmd_lab_record(a, print_json))
+
 
 def _run_options(p, runs: str | None = None) -> None:
     """The options every soil command that runs cases takes: where (--runs, when `runs` names its
@@ -129,4 +135,20 @@ def _cmd_validate(args, print_json) -> int:
         print(f"largest miss: line {miss['row']} ({miss['soil']}, {miss['surface']}, {miss['normal_stress_kpa']:g} kPa): "
               f"{miss['error_deg']:+.1f}° ({miss['source']}, {miss['table_or_figure']})")
     print("written: " + ", ".join(str(f) for f in res["files"]))
+    return 0
+
+
+def _cmd_lab_record(args, print_json) -> int:
+    from interphase.api import lab_record
+
+    rows = [lab_record(f) for f in args.files]           # every file read before anything is printed
+    if args.json:
+        print_json(rows)
+        return 0
+    for r in rows:
+        end = (f"last {100 * r['end_span']:g} % ({100 * r['eps1_end_from']:.1f}–{100 * r['eps1_last']:.1f} %): "
+               f"φ {r['phi_end_deg']:.1f}°, e {r['e_end']:.3f}, −dεv/dε1 {r['dilatancy_end']:.2f}")
+        print(f"{r['file']}: e0 {r['e0']:.4f}, σ3′ {r['sigma3_start'] / 1e3:.1f} kPa, {r['rows']} rows | "
+              f"φ_peak {r['phi_peak_deg']:.1f}° at ε1 {100 * r['eps1_peak']:.1f} %, ψ_max {r['psi_max_deg']:.1f}° "
+              f"(−dεv/dε1 {r['dilatancy_max']:.2f} from ε1 {100 * r['eps1_psi']:.1f} %) | end: {end}")
     return 0
