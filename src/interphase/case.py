@@ -24,7 +24,9 @@ from interphase.errors import InputError
 from interphase.material import Gradation
 from interphase.surface.spec import ProfileSpec
 
-TESTS = ("interface", "box")
+TESTS = ("interface", "box", "triaxial", "biaxial")
+#: the laboratory's element tests on a periodic cell (engines/cell.py) → the device each runs in
+CELL_TESTS = {"triaxial": "periodic3d", "biaxial": "periodic"}
 #: the named preparation states → Case.preparation (docs/soils.md gives the solid fraction each reaches)
 PREPARATIONS = {"dense": 0.0, "medium": 0.3, "loose": 1.0}
 DEVICES = ("walled", "periodic", "periodic3d")
@@ -89,6 +91,8 @@ class Case:
                                             # the depth is profile_y's periodic cell nearest
                                             # box_depth_d50 (docs/3d.md). None: the profile extruded
     name: str = field(default="", compare=False)  # a label for people; not part of the identity
+    strain_rate: float = 10.0               # triaxial/biaxial only: axial strain rate [1/s] (engineering)
+    axial_strain: float = 0.2               # triaxial/biaxial only: axial strain at the end [-]
     start: Start | None = None              # None: the engine's own lattice and consolidation; else
                                             # another run's consolidated specimen (set by the plan,
                                             # [campaign] specimen_from; never in a [case] table)
@@ -103,6 +107,8 @@ class Case:
             bad("device", f"unknown device {self.device!r}", f"use one of {', '.join(DEVICES)}")
         if self.test == "interface" and self.profile is None:
             bad("profile", "an interface test needs a surface profile", "give profile = {kind = 'flat'} or another")
+        if self.test in CELL_TESTS:
+            self._check_cell(bad)
         if self.test == "box" and self.profile is not None:
             bad("profile", "a direct shear box test takes no surface profile", "remove the profile")
         if self.test == "box" and self.friction_ps != self.friction_pw:
@@ -111,7 +117,7 @@ class Case:
             object.__setattr__(self, "friction_ps", self.friction_pw)
         if not isinstance(self.gradation, Gradation):
             bad("gradation", "gradation must be a Gradation")
-        if self.device != "periodic3d" and self.box_depth_d50 != 10.0:
+        if self.device != "periodic3d" and self.box_depth_d50 != 10.0 and not self.cell:
             bad("box_depth_d50", f"only the 3D device has a depth (device is {self.device!r})",
                 'use device = "periodic3d", or remove box_depth_d50')
         if self.profile_y is not None and not (self.three_d and self.test == "interface"):
@@ -126,7 +132,8 @@ class Case:
         if self.start is not None and not isinstance(self.start, Start):
             bad("start", f"must be a Start or None, got {self.start!r}", "set it with [campaign] specimen_from")
         positive = ("d50", "density", "shear_modulus", "normal_stress", "shear_velocity", "shear_distance",
-                    "snapshot_every", "box_length_d50", "box_height_d50", "box_depth_d50")
+                    "snapshot_every", "box_length_d50", "box_height_d50", "box_depth_d50", "strain_rate",
+                    "axial_strain")
         nonneg = ("friction_pp", "friction_ps", "friction_pw", "friction_side", "rolling_friction")
         for f in positive + nonneg + ("poisson", "restitution", "preparation"):
             v = getattr(self, f)
@@ -162,6 +169,25 @@ class Case:
                 "make snapshot_every ≤ shear_distance")
         if self.d50 < self.gradation.d_min or self.d50 > self.gradation.d_max:
             bad("d50", f"{self.d50!r} m lies outside the gradation {self.gradation.d_min}–{self.gradation.d_max} m")
+
+    def _check_cell(self, bad) -> None:
+        """The element tests' own rules (the shared ones follow in __post_init__)."""
+        want = CELL_TESTS[self.test]
+        if self.device != want:
+            bad("device", f"a {self.test} test runs in the {want!r} cell, not {self.device!r}", f'use device = "{want}"')
+        if self.profile is not None or self.profile_y is not None:
+            bad("profile", f"a {self.test} test shears no surface", "remove the profile")
+        if self.n_grains is None:
+            bad("n_grains", f"a {self.test} test needs its number of grains", "give n_grains (e.g. 1000 in 3D, 400 in 2D)")
+        if isinstance(self.axial_strain, (int, float)) and not 0 < self.axial_strain < 0.6:
+            bad("axial_strain", f"{self.axial_strain!r} is not an axial strain in (0, 0.6)", "e.g. 0.2 for 20 %")
+        if self.start is not None:
+            bad("start", f"a {self.test} test starts from its own lattice", "remove specimen_from")
+
+    @property
+    def cell(self) -> bool:
+        """A laboratory element test on a periodic cell (triaxial or biaxial)."""
+        return self.test in CELL_TESTS
 
     # ---- derived ---------------------------------------------------------------------------
     @property
@@ -272,18 +298,27 @@ class Case:
                 continue
             v = getattr(self, f.name)
             if (f.name in ("start", "profile_y") and v is None) or (f.name == "preparation" and v == 1.0) \
-                    or (f.name == "box_depth_d50" and not self.three_d):
+                    or (f.name == "box_depth_d50" and not self.three_d) \
+                    or (f.name in CELL_ONLY and not self.cell) or (f.name in CELL_IGNORES and self.cell):
                 continue            # the usual start and preparation, a 2D device's depth: no key, so every case id without them stays as it was
             if isinstance(v, (ProfileSpec, Gradation, Start)):
                 v = v.canonical()
             elif isinstance(v, float):
                 v = float(repr(v))
             out[f.name] = v
+        if self.cell:               # the cell protocol's constants (interphase.recipe.CELL_RECIPE) are part of it
+            from interphase.recipe import CELL_RECIPE
+
+            out["cell_recipe"] = CELL_RECIPE.identity()
         return out
 
     def label(self) -> str:
         if self.name:
             return self.name
+        if self.cell:
+            grading = "user" if self.gradation.sizes else self.gradation.name
+            prep = "" if self.preparation == 1.0 else f"-prep{self.preparation:g}"
+            return f"{self.test}-{self.normal_stress / 1e3:g}kPa-n{self.n_grains}-{grading}{prep}-s{self.seed}"
         surface = self.profile.label() if self.profile else "box"
         if self.profile_y is not None:
             surface += f"-y-{self.profile_y.label()}"
@@ -319,6 +354,12 @@ def physical_id(case: Case, length: int = 12) -> str:
     if "start" in inputs:
         inputs["start"] = {"engine": inputs["start"]["engine"]}
     return hashlib.sha256(canonical_json({"physical_case": inputs}).encode()).hexdigest()[:length]
+
+#: in the identity of a cell test only (every other case id stays as it was)
+CELL_ONLY = ("strain_rate", "axial_strain")
+#: what a cell test does not use: left out of its identity
+CELL_IGNORES = ("profile", "profile_y", "friction_ps", "friction_pw", "friction_side", "shear_velocity",
+                "shear_distance", "snapshot_every", "box_length_d50", "box_height_d50", "box_depth_d50")
 
 #: Case fields the plan sets, never a campaign's [case] table → what to write instead
 PLANNED_FIELDS = {"start": 'a case starts from another engine\'s specimen by [campaign] specimen_from = "liggghts"'}

@@ -148,3 +148,39 @@ def read_record(folder: str | Path) -> RunRecord:
         n_grains=m.get("n_grains", 0), platen_force=m.get("platen_force", 0.0),
         window=tuple(m["window"]) if m.get("window") else None,
         steps=Steps(**{f.name: steps[f.name] for f in dataclasses.fields(Steps)}))
+
+
+@dataclass(frozen=True)
+class CellRecipe:
+    """Protocol constants of the element cell (triaxial / biaxial, engines/cell.py). Hashed into the
+    identity of every cell case (Case.canonical: `cell_recipe`), never into another case's, so that a
+    change here renews the cell cases only. Why each value is what it is: docs/soils.md."""
+
+    version: int = 1
+    time_step_fraction: float = 0.2      # dt = this × Rayleigh time of the smallest grain
+    skin_fraction: float = 0.2           # neighbour skin = this × d_min
+    lattice_pitch: float = 1.1           # the loose start: grains on a cubic (3D) or square (2D) lattice of
+                                         # this × d_max, jittered by ±lattice_jitter of the pitch
+    lattice_jitter: float = 0.04
+    # the stress servo of every free cell axis: strain rate = gain × (σ − σ_target)/σ_target, capped at
+    # ±compaction_cap while consolidating and ±shear_cap while shearing [1/s]; the stress it reads is
+    # the contact stress averaged over the last servo_window evaluations, every servo_every steps
+    servo_gain: float = 1000.0
+    compaction_cap: float = 100.0
+    shear_cap: float = 50.0
+    servo_every: int = 10
+    servo_window: int = 5
+    # consolidation: a first stretch, then chunks until every axis' stress lies within ±tolerance of σ3′
+    # and the kinetic energy per grain is below settle_energy × (σ3′ d50³) (a packing at rest)
+    consolidation_time: float = 0.02     # [s]
+    chunk_time: float = 0.002            # [s]
+    consolidation_chunks: int = 60
+    tolerance: float = 0.01
+    settle_energy: float = 1e-6
+    history_points: int = 400            # history rows over the axial compression
+
+    def identity(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+CELL_RECIPE = CellRecipe()

@@ -105,6 +105,11 @@ def summarise(case: Case, results) -> tuple[dict, object]:
     """(flat summary row, series DataFrame) of a finished case (interphase.analysis.summary)."""
     from interphase.analysis.summary import summarise as analysis_summarise
 
+    if case.cell:
+        from interphase.analysis.cell_run import summarise_cell
+
+        return summarise_cell(case, results)
+
     summary = analysis_summarise(case, results)
     return dict(summary.row), summary.series
 

@@ -203,7 +203,8 @@ class Engine(abc.ABC):
             cause, message = died_of_signal(self.label, -rc)
         if cause:
             raise EngineError(cause, message, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
-        for name in self.outputs:
+        outputs = self.outputs if not (folder / "cell.json").exists() else ("history.txt",)
+        for name in outputs:
             if not (folder / name).exists():
                 raise EngineError("missing_output", f"{self.label} finished without writing {name}", command=cmd,
                                   returncode=rc, log_tail=log_tail(log), folder=folder)

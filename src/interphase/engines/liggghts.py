@@ -20,11 +20,13 @@ import numpy as np
 
 from interphase.case import Case
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
+from interphase.engines.cell import Cell, cell
 from interphase.engines.device import Device, device, time_step
 from interphase.engines.packing import write_liggghts_data
 from interphase.engines.render import environment
 from interphase.material import youngs_modulus
 from interphase.recipe import FILE as RECIPE_FILE
+from interphase.recipe import RECIPE
 from interphase.recipe import read_record
 from interphase.surface.mesh import segment_triangles, stl_text
 from interphase.version import __version__
@@ -81,6 +83,26 @@ def deck_values(dev: Device) -> dict:
         n_history=s.n_history, n_thermo=max(1, s.n_shear // r.thermo_points))
 
 
+def cell_values(c: Cell) -> dict:
+    """The cell deck's values (templates/liggghts/cell.in.j2): numbers and validated names only."""
+    case, r = c.case, c.recipe
+    tol, s3 = r.tolerance, case.normal_stress
+    prep = case.preparation
+    return dict(version=__version__, title=case.test, three_d=c.three_d,
+                E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=case.restitution,
+                friction=case.friction_pp, rolling=case.rolling_friction, prep_friction=prep * case.friction_pp,
+                prep_rolling=prep * case.rolling_friction, rolling_model=RECIPE.rolling_model, dt=c.dt, skin=c.skin,
+                every=r.servo_every, window=r.servo_window, servo_step=r.servo_every * c.dt,
+                # quasi-2D: the engine divides by Lx·Ly·Lz, the stress is per Lx·Lz·t
+                stress_scale=1.0 if c.three_d else c.size[1] / c.thickness,
+                sigma3=s3, gain=r.servo_gain, compaction_cap=r.compaction_cap, shear_cap=r.shear_cap,
+                lo=(1 - tol) * s3, hi=(1 + tol) * s3, ke_max=r.settle_energy * s3 * case.d50 ** 3 * c.packing.n,
+                size=c.size, n_consolidate=c.steps.n_consolidate, n_chunk=c.steps.n_chunk,
+                n_chunks_max=c.steps.n_chunks_max, n_settle=c.n_settle, n_shear=c.steps.n_shear,
+                n_history=c.steps.n_history, strain_rate=case.strain_rate,
+                n_thermo=max(r.servo_every, c.steps.n_shear // 20 // r.servo_every * r.servo_every))
+
+
 @register
 class Liggghts(Engine):
     name, label = "liggghts", "LIGGGHTS"
@@ -89,6 +111,8 @@ class Liggghts(Engine):
     template_suffix = ".in.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
+        if case.cell:
+            return self._render_cell(case)
         dev = device(case, self.recipe)
         values = deck_values(dev)
         x_lo, x_hi, z_lo, z_hi = dev.bounds
@@ -100,7 +124,22 @@ class Liggghts(Engine):
                 **mesh_files(dev), "grains.data": write_liggghts_data(dev.packing, case.density, box),
                 "engine.json": json.dumps(meta, indent=1, default=float), RECIPE_FILE: dev.record(self.name).to_json()}
 
+    def _render_cell(self, case: Case) -> dict[str, str]:
+        """A triaxial or biaxial case: the cell deck (templates/liggghts/cell.in.j2), its grains and
+        cell.json (the numbers the reader needs: solid volume, thickness)."""
+        c = cell(case)
+        values = cell_values(c)
+        Lx, Ly, Lz = c.size
+        box = (0.0, Lx, -Ly / 2 if not c.three_d else 0.0, Ly / 2 if not c.three_d else Ly, 0.0, Lz)
+        meta = dict(test=case.test, solid=c.solid, thickness=c.thickness, three_d=c.three_d, n_grains=c.packing.n,
+                    sigma3=case.normal_stress, strain_rate=case.strain_rate, d50=case.d50, density=case.density)
+        return {"in.deck": environment(self.templates).get_template("cell.in.j2").render(**values),
+                "grains.data": write_liggghts_data(c.packing, case.density, box),
+                "cell.json": json.dumps(meta, indent=1), RECIPE_FILE: c.record(self.name).to_json()}
+
     def template_name(self, case: Case) -> str:
+        if case.cell:
+            return "cell.in.j2"
         return "periodic_shear.in.j2" if case.periodic else super().template_name(case)
 
     def arguments(self, binary: str) -> list[str]:
@@ -126,6 +165,10 @@ class Liggghts(Engine):
     def read_results(self, folder) -> Results:
         from interphase.io.liggghts import read_folder
 
+        if (Path(folder) / "cell.json").exists():
+            from interphase.io.cell import read_cell_folder
+
+            return read_cell_folder(folder)
         return read_folder(folder)
 
 

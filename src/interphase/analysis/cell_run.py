@@ -1,0 +1,56 @@
+"""Summary of one cell run (triaxial / biaxial, engines/cell.py) from its history table (io/cell.py).
+
+The strength and dilatancy come from `analysis.triaxial.shear_state`, the code that reads the
+laboratory's records, on the run's curves smoothed over SMOOTH_EPS1 of ε1 (a centred moving average:
+one run's stress ratio fluctuates as force chains rearrange; a laboratory curve is already smooth,
+and the same smoothing moves its φ_peak and ψ_max by < 0.1°, tests/test_cell.py). A physical case's
+values are read from its seeds together (analysis/cell_ensemble.py), not from these rows.
+
+Also the checks a reader of the run wants: how well σ3′ was held (largest relative departure of the
+lateral stress from the target over the compression), the inertial number I = γ̇ d50 √(ρ/p′) with
+γ̇ = ε̇1 − ε̇3 measured from the cell's own strain rates (the largest over the compression; < 1e-3
+is quasi-static), the void ratio at the start, at the peak and at the end.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from interphase.analysis.strength import moving_average
+from interphase.analysis.triaxial import shear_state
+
+SMOOTH_EPS1 = 0.005     # [-] the moving-average window on ε1 of one run's curves
+
+
+def lateral_strain(h: pd.DataFrame, three_d: bool) -> np.ndarray:
+    """ε3 [-] (compression positive) from εv and ε1: 3D, εv = ε1 + 2ε3 (axisymmetric on average);
+    2D, εv = ε1 + ε3. Small-strain sums, as the laboratory's."""
+    return (h["epsv"].to_numpy() - h["eps1"].to_numpy()) / (2 if three_d else 1)
+
+
+def summarise_cell(case, results) -> tuple[dict, pd.DataFrame]:
+    """(summary row, series) of a finished triaxial or biaxial run."""
+    h = results.history
+    three_d = case.test == "triaxial"
+    x = h["eps1"].to_numpy()
+    ratio = moving_average(x, h["ratio"].to_numpy(), SMOOTH_EPS1)
+    epsv = moving_average(x, h["epsv"].to_numpy(), SMOOTH_EPS1)
+    state = shear_state(x, epsv, ratio, h["e"].to_numpy())
+    i_peak = int(np.argmin(np.abs(x - state.eps1_peak)))
+    t = h["time"].to_numpy()
+    e3 = lateral_strain(h, three_d)
+    gamma_dot = np.gradient(x - e3, t) if len(t) > 2 else np.array([math.nan])
+    p = h["p"].to_numpy()
+    inertial = gamma_dot * case.d50 * np.sqrt(case.density / np.where(p > 0, p, np.nan))
+    held = np.abs(h["sigma3"].to_numpy() / case.normal_stress - 1)
+    row = {"test": case.test, "case": case.label(), **{k: v for k, v in state.to_dict().items()},
+           "e0": float(h["e"].iloc[0]), "e_peak": float(h["e"].iloc[i_peak]), "void_ratio_start": float(h["e"].iloc[0]),
+           "sigma3_departure_max": float(np.nanmax(held)), "sigma3_departure_mean": float(np.nanmean(held)),
+           "inertial_number_max": float(np.nanmax(inertial)), "inertial_number_mean": float(np.nanmean(inertial)),
+           "coordination_start": float(2 * h["n_contacts"].iloc[0] / case.n_grains),
+           "n_grains": int(case.n_grains), "peak_stress_ratio": float(state.ratio_peak)}
+    series = h.assign(ratio_smooth=ratio, epsv_smooth=epsv, eps3=e3)
+    return row, series
