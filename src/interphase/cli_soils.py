@@ -11,11 +11,26 @@ def add_soils(sub, print_json) -> None:
     p = sub.add_parser("element", help="the soil's element test: φ_peak, φ_cs, ψ_max and solid fraction with seed "
                        "intervals (periodic shear cell of the soil alone)")
     p.add_argument("card", help="soil card (soils/NAME.toml)")
-    p.add_argument("--normal-stress", type=float, action="append", required=True, metavar="PA",
-                   help="normal stress [Pa] (repeatable)")
+    p.add_argument("--normal-stress", type=float, action="append", metavar="PA",
+                   help="direct shear: normal stress [Pa] (repeatable)")
+    p.add_argument("--test", choices=("shear", "triaxial", "biaxial"), default=None,
+                   help="shear (the periodic direct shear, the default with --normal-stress), or the laboratory's "
+                   "triaxial (3D) / biaxial (quasi-2D) compression (the default with --confining-stress: the card's "
+                   "[cell] test)")
+    p.add_argument("--confining-stress", type=float, action="append", metavar="PA",
+                   help="triaxial/biaxial: confining stress σ3′ [Pa] (repeatable)")
+    p.add_argument("--relative-density", type=float, default=None, metavar="DR",
+                   help="triaxial/biaxial: relative density, a fraction (default: the card's preparation)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
     _run_options(p, runs="runs/element/<card name>")
     p.set_defaults(func=lambda a: _cmd_element(a, print_json))
+
+    p = sub.add_parser("density", help="the void ratios a card's grains reach by the cell's preparation: e_min "
+                       "(frictionless), e_max (the grains' own friction) and between; written into the card's [density]")
+    p.add_argument("card", help="soil card (soils/NAME.toml)")
+    p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
+    _run_options(p, runs="runs/density/<card name>")
+    p.set_defaults(func=lambda a: _cmd_density(a, print_json))
 
     p = sub.add_parser("calibrate", help="calibrate grain parameters to a laboratory soil (GrainLearning: "
                        "Bayesian, iterative); writes a soil card with its posterior")
@@ -71,6 +86,11 @@ def _cmd_element(args, print_json) -> int:
     from interphase.soil import load_card
 
     _check_seeds(args.seeds)
+    if args.test in ("triaxial", "biaxial") or (args.confining_stress and args.test is None):
+        return _cmd_cell(args, print_json)
+    if not args.normal_stress:
+        raise InputError("no stress given", where="--normal-stress",
+                         fix="direct shear: --normal-stress PA; the laboratory's test: --confining-stress PA")
     for s in args.normal_stress:
         if not s > 0:
             raise InputError(f"must be > 0 Pa, got {s!r}", where="--normal-stress", fix="e.g. --normal-stress 100e3")
@@ -91,6 +111,55 @@ def _cmd_element(args, print_json) -> int:
         if r.note:
             print(f"  note: {r.note}")
     return 0 if all(r.n_seeds for r in results) else 1
+
+
+def _cmd_cell(args, print_json) -> int:
+    from interphase.campaign.element import run_cell
+    from interphase.errors import InputError
+    from interphase.soil import load_card
+
+    if not args.confining_stress:
+        raise InputError("no confining stress given", where="--confining-stress", fix="e.g. --confining-stress 100e3")
+    for s in args.confining_stress:
+        if not s > 0:
+            raise InputError(f"must be > 0 Pa, got {s!r}", where="--confining-stress", fix="e.g. --confining-stress 100e3")
+    card = load_card(args.card)
+    results = run_cell(card, args.confining_stress, range(1, args.seeds + 1), test=args.test,
+                       relative_density=args.relative_density, output=args.runs, executor=args.executor,
+                       jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        rows = [r.to_dict() for r in results]
+        print_json(rows[0] if len(rows) == 1 else rows)
+        return 0 if all(r.n_seeds for r in results) else 1
+    for r in results:
+        def iv(name, fmt=".1f"):
+            v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
+            return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
+        dr = f", Dr {r.relative_density:.2f}" if r.relative_density == r.relative_density else ""
+        print(f"{card.name}, {r.test} at σ3′ {r.confining_stress / 1e3:g} kPa, {r.n_seeds} seeds: "
+              f"φ_peak {iv('phi_peak_deg')}° at ε1 {100 * r.eps1_at_peak:.1f} %, ψ_max {iv('psi_max_deg')}°, "
+              f"φ at ε1 {100 * r.eps1_end:.0f} % {iv('phi_cs_deg')}°, e0 {iv('void_ratio', '.3f')}{dr} "
+              f"(preparation {r.preparation:g})")
+        if r.note:
+            print(f"  note: {r.note}")
+    return 0 if all(r.n_seeds for r in results) else 1
+
+
+def _cmd_density(args, print_json) -> int:
+    from interphase.campaign.density import measure_density
+    from interphase.soil import load_card
+
+    _check_seeds(args.seeds)
+    out = measure_density(load_card(args.card), range(1, args.seeds + 1), output=args.runs, executor=args.executor,
+                          jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"{out['card']}: e_min {out['e_min']:.4f}, e_max {out['e_max']:.4f} at {out['reference_stress'] / 1e3:g} kPa "
+          f"({out['seeds']} seeds); preparation → e: " + ", ".join(
+              f"{p:g} → {e:.4f}" for p, e in zip(out["preparations"], out["void_ratios"])))
+    print(f"[density] {'written into' if out['written'] else 'already in'} {out['card']}")
+    return 0
 
 
 def _cmd_calibrate(args, print_json) -> int:

@@ -162,21 +162,24 @@ class CellRecipe:
     lattice_pitch: float = 1.1           # the loose start: grains on a cubic (3D) or square (2D) lattice of
                                          # this × d_max, jittered by ±lattice_jitter of the pitch
     lattice_jitter: float = 0.04
-    # the stress servo of every free cell axis: strain rate = gain × (σ − σ_target)/σ_target, capped at
+    # the stress servo of every free cell axis: strain rate = G × (σ − σ_target)/σ_target, capped at
     # ±compaction_cap while consolidating and ±shear_cap while shearing [1/s]; the stress it reads is
-    # the contact stress averaged over the last servo_window evaluations, every servo_every steps
-    servo_gain: float = 1000.0
+    # the contact stress averaged over the last servo_window evaluations, every servo_every steps.
+    # G = servo_gain × (σ_target/E*)^(2/3) / (servo_every·dt): a packing's stiffness over its stress
+    # goes as the inverse of the Hertz overlap, ∝ (σ/E*)^(−2/3), so this keeps the relative stress change
+    # per servo update the same at any stress and stiffness (a constant G oscillated at 10 kPa)
+    servo_gain: float = 0.2
     compaction_cap: float = 100.0
     shear_cap: float = 50.0
     servo_every: int = 10
     servo_window: int = 5
     # consolidation: a first stretch, then chunks until every axis' stress lies within ±tolerance of σ3′
     # and the kinetic energy per grain is below settle_energy × (σ3′ d50³) (a packing at rest)
-    consolidation_time: float = 0.02     # [s]
+    consolidation_time: float = 0.004    # [s]
     chunk_time: float = 0.002            # [s]
     consolidation_chunks: int = 60
     tolerance: float = 0.01
-    settle_energy: float = 1e-6
+    settle_energy: float = 1e-4
     history_points: int = 400            # history rows over the axial compression
 
     def identity(self) -> dict:

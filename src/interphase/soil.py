@@ -28,7 +28,10 @@ SOIL_FIELDS = ("d50", "gradation", "density", "shear_modulus", "poisson", "resti
 #: whose φ_peak scatters a fifth as much as the 20 × 15 cell's over 5 seeds, at twice its cost)
 ELEMENT_DEFAULTS = {"box_length_d50": 30.0, "box_height_d50": 20.0, "shear_velocity": 0.05,
                     "shear_distance": 0.006, "snapshot_every": 0.0005, "friction_pw": 0.9}
-CARD_KEYS = ("soil", "element", "target", "posterior", "achieved", "verification", "calibration")
+#: the laboratory's element test on the periodic cell (`[cell]`, engines/cell.py): its test and protocol
+#: (docs/soils.md: the specimen size converged for φ_peak and ψ_max, the rate quasi-static)
+CELL_DEFAULTS = {"test": "triaxial", "n_grains": 1000, "strain_rate": 10.0, "axial_strain": 0.2}
+CARD_KEYS = ("soil", "element", "cell", "density", "target", "posterior", "achieved", "verification", "calibration")
 
 
 @dataclass(frozen=True)
@@ -39,6 +42,27 @@ class SoilCard:
     element: dict                     # element-test protocol (ELEMENT_DEFAULTS keys)
     description: str = ""
     extra: dict = field(default_factory=dict)     # target, posterior, achieved, verification, calibration
+
+    @property
+    def cell(self) -> dict:
+        """The card's [cell] protocol over CELL_DEFAULTS (2D cards: `test = "biaxial"`)."""
+        return {**CELL_DEFAULTS, **self.extra.get("cell", {})}
+
+    def cell_case(self, confining_stress: float, seed: int = 1, *, test: str | None = None, **changes) -> dict:
+        """The laboratory's element test (triaxial / biaxial) as a [case] table (plain data)."""
+        cell = dict(self.cell)
+        test = test or cell.pop("test")
+        cell.pop("test", None)
+        device = "periodic3d" if test == "triaxial" else "periodic"
+        return {"test": test, "device": device, **self.soil, **cell, "normal_stress": float(confining_stress),
+                "seed": int(seed), **changes}
+
+    @property
+    def void_ratio_limits(self) -> tuple[float, float]:
+        """(e_min, e_max) the card's grains reach by its own protocol ([density], `campaign density`);
+        NaNs without them."""
+        d = self.extra.get("density", {})
+        return float(d.get("e_min", "nan")), float(d.get("e_max", "nan"))
 
     def element_case(self, normal_stress: float, seed: int = 1, **changes) -> dict:
         """The element test's Case fields as a [case] table (plain data)."""
@@ -119,7 +143,23 @@ def load_card(path) -> SoilCard:
         case_from_dict(card.element_case(100e3), where=f"{p}: [soil]")
     except InputError as exc:
         raise InputError(str(exc).split(": ", 1)[-1], where=f"{p}: [soil]") from None
+    _check_cell(card, bad)
     return card
+
+
+def _check_cell(card: SoilCard, bad) -> None:
+    """The [cell] table's keys, and its case as the Case would check it."""
+    from interphase.case import case_from_dict
+
+    for key in card.extra.get("cell", {}):
+        if key not in CELL_DEFAULTS:
+            raise bad("cell", key, f"{key!r} is not a cell field", f"use {', '.join(CELL_DEFAULTS)}")
+    if card.cell["test"] not in ("triaxial", "biaxial"):
+        raise bad("cell", "test", f"unknown cell test {card.cell['test']!r}", 'use "triaxial" (3D) or "biaxial" (2D)')
+    try:
+        case_from_dict(card.cell_case(100e3), where="[cell]")
+    except InputError as exc:
+        raise InputError(str(exc), where=f"{card.path}") from None
 
 
 def merge_soil(table: dict, card: SoilCard, where: str) -> dict:

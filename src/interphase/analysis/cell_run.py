@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from interphase.analysis.strength import moving_average
-from interphase.analysis.triaxial import shear_state
+from interphase.analysis.triaxial import WINDOW, shear_state
 
 SMOOTH_EPS1 = 0.005     # [-] the moving-average window on ε1 of one run's curves
 
@@ -38,19 +38,23 @@ def summarise_cell(case, results) -> tuple[dict, pd.DataFrame]:
     x = h["eps1"].to_numpy()
     ratio = moving_average(x, h["ratio"].to_numpy(), SMOOTH_EPS1)
     epsv = moving_average(x, h["epsv"].to_numpy(), SMOOTH_EPS1)
-    state = shear_state(x, epsv, ratio, h["e"].to_numpy())
-    i_peak = int(np.argmin(np.abs(x - state.eps1_peak)))
+    if np.ptp(x) >= WINDOW:
+        state = shear_state(x, epsv, ratio, h["e"].to_numpy()).to_dict()
+    else:   # a token compression (campaign density): the start's void ratio is what it is for
+        state = {"phi_peak_deg": math.nan, "eps1_peak": math.nan, "psi_max_deg": math.nan, "phi_end_deg": math.nan,
+                 "ratio_peak": math.nan}
+    i_peak = int(np.argmin(np.abs(x - state["eps1_peak"]))) if np.isfinite(state["eps1_peak"]) else 0
     t = h["time"].to_numpy()
     e3 = lateral_strain(h, three_d)
     gamma_dot = np.gradient(x - e3, t) if len(t) > 2 else np.array([math.nan])
     p = h["p"].to_numpy()
     inertial = gamma_dot * case.d50 * np.sqrt(case.density / np.where(p > 0, p, np.nan))
     held = np.abs(h["sigma3"].to_numpy() / case.normal_stress - 1)
-    row = {"test": case.test, "case": case.label(), **{k: v for k, v in state.to_dict().items()},
+    row = {"test": case.test, "case": case.label(), **state,
            "e0": float(h["e"].iloc[0]), "e_peak": float(h["e"].iloc[i_peak]), "void_ratio_start": float(h["e"].iloc[0]),
            "sigma3_departure_max": float(np.nanmax(held)), "sigma3_departure_mean": float(np.nanmean(held)),
            "inertial_number_max": float(np.nanmax(inertial)), "inertial_number_mean": float(np.nanmean(inertial)),
            "coordination_start": float(2 * h["n_contacts"].iloc[0] / case.n_grains),
-           "n_grains": int(case.n_grains), "peak_stress_ratio": float(state.ratio_peak)}
+           "n_grains": int(case.n_grains), "peak_stress_ratio": float(state["ratio_peak"])}
     series = h.assign(ratio_smooth=ratio, epsv_smooth=epsv, eps3=e3)
     return row, series

@@ -56,9 +56,33 @@ CONVERGED = {
 }
 
 
+def cell_inertial_estimate(case) -> float:
+    """The inertial number a triaxial/biaxial case starts its compression at [-]: I = γ̇ d50 √(ρ/σ3′)
+    with γ̇ = 1.5 ε̇1 (ε̇3 ≈ −ε̇1/2 at constant volume); the run measures its own (analysis/cell_run.py)."""
+    import math
+
+    return 1.5 * case.strain_rate * case.d50 * math.sqrt(case.density / case.normal_stress)
+
+
+def _cell_rate(cases) -> list[str]:
+    slow = [c for c in cases if c.cell and cell_inertial_estimate(c) >= 1e-3]
+    if not slow:
+        return []
+    c = max(slow, key=cell_inertial_estimate)
+    return [f"{len(slow)} triaxial/biaxial case(s) at a strain rate whose estimated inertial number reaches "
+            f"{cell_inertial_estimate(c):.2g} (strain_rate {c.strain_rate:g} /s at σ3′ {c.normal_stress:g} Pa): not "
+            "quasi-static (I < 1e-3); lower strain_rate"]
+
+
 def input_errors(cases, where: str = "case") -> None:
     """Raise an InputError for the first case whose shear is far from quasi-static (I ≥ INERTIAL_ERROR)."""
     for c in cases:
+        if c.cell:
+            if cell_inertial_estimate(c) >= INERTIAL_ERROR:
+                raise InputError(f"strain_rate = {c.strain_rate:g} /s gives an estimated inertial number "
+                                 f"{cell_inertial_estimate(c):.2g}: the grains are thrown, not sheared",
+                                 where=f"{where}.strain_rate", fix="use a strain rate of about 10 /s or less")
+            continue
         i = inertial_estimate(c)
         if i >= INERTIAL_ERROR:
             raise InputError(f"shear_velocity = {c.shear_velocity:g} m/s gives an estimated inertial number "
@@ -71,8 +95,12 @@ def input_warnings(cases) -> list[str]:
     """One line per implausible (field, value) over `cases` (with how many cases it concerns), then
     the inertial-number warnings of `analysis.quasistatic.rate_warnings`. Empty when everything is plausible."""
     seen: dict[tuple[str, object], int] = {}
-    for c in cases:
+    cells = [c for c in cases if c.cell]
+    cases = [c for c in cases if not c.cell]
+    for c in cases + cells:
         for name, (lo, hi, _, _) in PLAUSIBLE.items():
+            if c.cell and name in ("shear_distance", "box_length_d50", "box_height_d50"):
+                continue
             v = getattr(c, name)
             if v is not None and not lo <= v <= hi:
                 seen[(name, v)] = seen.get((name, v), 0) + 1
@@ -80,7 +108,7 @@ def input_warnings(cases) -> list[str]:
     for (name, v), n in seen.items():
         lo, hi, unit, why = PLAUSIBLE[name]
         out.append(f"{n} case(s) with {name} = {v:g} {unit}: outside the plausible {lo:g}–{hi:g} {unit} ({why})")
-    return out + rate_warnings(cases)
+    return out + (rate_warnings(cases) if cases else []) + _cell_rate(cells)
 
 
 def default_notes(stated) -> list[str]:

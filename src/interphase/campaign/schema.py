@@ -156,7 +156,8 @@ class Campaign:
         from interphase.campaign.checks import default_notes, input_warnings
 
         cases = list(self._spec.checked) if self._spec is not None else [c.case for c in self.cases]
-        return input_warnings(cases) + default_notes(self.stated)
+        shear = any(not c.cell for c in cases)
+        return input_warnings(cases) + (default_notes(self.stated) if shear else [])
 
     @property
     def pairs(self) -> list[tuple[int, int]]:

@@ -88,14 +88,16 @@ def cell_values(c: Cell) -> dict:
     case, r = c.case, c.recipe
     tol, s3 = r.tolerance, case.normal_stress
     prep = case.preparation
+    E = youngs_modulus(case.shear_modulus, case.poisson)
+    gain = r.servo_gain * (s3 / (E / (2 * (1 - case.poisson ** 2)))) ** (2 / 3) / (r.servo_every * c.dt)
     return dict(version=__version__, title=case.test, three_d=c.three_d,
-                E=youngs_modulus(case.shear_modulus, case.poisson), nu=case.poisson, restitution=case.restitution,
+                E=E, nu=case.poisson, restitution=case.restitution,
                 friction=case.friction_pp, rolling=case.rolling_friction, prep_friction=prep * case.friction_pp,
                 prep_rolling=prep * case.rolling_friction, rolling_model=RECIPE.rolling_model, dt=c.dt, skin=c.skin,
                 every=r.servo_every, window=r.servo_window, servo_step=r.servo_every * c.dt,
                 # quasi-2D: the engine divides by Lx·Ly·Lz, the stress is per Lx·Lz·t
                 stress_scale=1.0 if c.three_d else c.size[1] / c.thickness,
-                sigma3=s3, gain=r.servo_gain, compaction_cap=r.compaction_cap, shear_cap=r.shear_cap,
+                sigma3=s3, gain=gain, compaction_cap=r.compaction_cap, shear_cap=r.shear_cap,
                 lo=(1 - tol) * s3, hi=(1 + tol) * s3, ke_max=r.settle_energy * s3 * case.d50 ** 3 * c.packing.n,
                 size=c.size, n_consolidate=c.steps.n_consolidate, n_chunk=c.steps.n_chunk,
                 n_chunks_max=c.steps.n_chunks_max, n_settle=c.n_settle, n_shear=c.steps.n_shear,

@@ -1,0 +1,116 @@
+"""The laboratory's element test (triaxial / biaxial) of one soil at one confining stress, from its
+seed runs together: angles by the laboratory's definitions (analysis/triaxial.py) on the seed-mean
+curves, intervals from the seeds.
+
+Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compression positive):
+  - the seed-mean curves: each seed's R(ε1) and εv(ε1) interpolated on a common grid of GRID_STEP
+    up to the shortest run's ε1, averaged over the seeds, R smoothed over SMOOTH_EPS1
+    (analysis.cell_run); `shear_state` of those curves gives φ_peak, ε1 at peak, ψ_max, the end state.
+  - intervals (95 %, Student t over the seeds): φ_peak from each seed's mean R over the smoothing
+    window at the seed-mean curve's peak (the peak state of each seed), mapped through
+    asin((R − 1)/(R + 1)); ψ_max from each seed's dilatancy rate over the seed-mean curve's 1 %
+    window of largest dilation; φ_cs (the end state: mean R over the last END_SPAN of ε1) from each
+    seed's end value; e from each seed's void ratio at the start of the compression.
+  - relative density Dr = (e_max − e)/(e_max − e_min), e the mean void ratio at the start of the
+    compression, e_min/e_max the card's own (its [density] table, soil.py); NaN without them.
+`phi_cs_deg` is the end state's angle; `dilatancy_end` > 0 says the specimen was still dilating
+there, so that angle is not yet a critical state (the laboratory's Karlsruhe records end so too).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from interphase.analysis.cell_run import SMOOTH_EPS1
+from interphase.analysis.ensemble import t_interval
+from interphase.analysis.strength import moving_average
+from interphase.analysis.triaxial import END_SPAN, WINDOW, friction_angle, psi_from_rate, shear_state
+
+GRID_STEP = 0.001      # [-] the common ε1 grid of the seed-mean curves
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """One soil at one confining stress: angles [°], strains [-], each with a 95 % interval over the
+    seeds (NaN with fewer than two)."""
+
+    test: str
+    confining_stress: float          # [Pa]
+    n_seeds: int
+    phi_peak_deg: float
+    phi_peak_deg_lo: float
+    phi_peak_deg_hi: float
+    eps1_at_peak: float
+    psi_max_deg: float
+    psi_max_deg_lo: float
+    psi_max_deg_hi: float
+    phi_cs_deg: float
+    phi_cs_deg_lo: float
+    phi_cs_deg_hi: float
+    dilatancy_end: float             # −dεv/dε1 over the end span of the seed-mean curve
+    void_ratio: float                # at the start of the compression (2D: the area void ratio)
+    void_ratio_lo: float
+    void_ratio_hi: float
+    relative_density: float          # [-] on the card's e_min, e_max; NaN without them
+    eps1_end: float                  # the shortest seed's axial strain
+    preparation: float = math.nan
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
+
+
+def mean_curves(runs, step: float = GRID_STEP):
+    """(grid, R (n, m), εv (n, m)) of `runs` = [(ε1, εv, R), ...] on a common ε1 grid."""
+    end = min(float(np.nanmax(r[0])) for r in runs)
+    grid = np.arange(0.0, end + 1e-12, step)
+    R = np.array([np.interp(grid, *_sorted(x, r)) for x, _, r in runs])
+    V = np.array([np.interp(grid, *_sorted(x, v)) for x, v, _ in runs])
+    return grid, R, V
+
+
+def _sorted(x, y):
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    o = np.argsort(x, kind="stable")
+    return x[o], y[o]
+
+
+def _interval(values, fn=lambda v: v):
+    lo, hi = t_interval(np.asarray(values, float))
+    return float(fn(lo)), float(fn(hi))
+
+
+def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limits=(math.nan, math.nan),
+                preparation: float = math.nan) -> CellResult:
+    """`runs` = [(ε1, εv, R), ...] one per seed (a run's history columns); `void_ratios` each seed's
+    e at the start of the compression; `e_limits` = (e_min, e_max) of the card's grains."""
+    n = len(runs)
+    if n == 0:
+        nan = math.nan
+        return CellResult(test, confining_stress, 0, *(nan,) * 16, preparation, "no finished run")
+    grid, R, V = mean_curves(runs)
+    r_mean = moving_average(grid, R.mean(axis=0), SMOOTH_EPS1)
+    state = shear_state(grid, V.mean(axis=0), r_mean)
+    near = np.abs(grid - state.eps1_peak) <= SMOOTH_EPS1 / 2
+    seed_peak = R[:, near].mean(axis=1)
+    inside = (grid >= state.eps1_psi) & (grid <= state.eps1_psi + WINDOW)
+    seed_rate = np.array([-np.polyfit(grid[inside], v[inside], 1)[0] for v in V])
+    tail = grid >= grid[-1] - END_SPAN
+    seed_end = R[:, tail].mean(axis=1)
+    e = np.asarray(void_ratios, float)
+    e_min, e_max = e_limits
+    dr = (e_max - e.mean()) / (e_max - e_min) if np.isfinite([e_min, e_max]).all() else math.nan
+    notes = [] if n >= 2 else ["one seed: no intervals (run ≥ 3 seeds)"]
+    if state.dilatancy_end > 0.05:
+        notes.append(f"still dilating at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is the end "
+                     "state's angle, not yet a critical state")
+    return CellResult(
+        test, confining_stress, n, state.phi_peak_deg, *_interval(seed_peak, friction_angle), state.eps1_peak,
+        state.psi_max_deg, *_interval(seed_rate, psi_from_rate), state.phi_end_deg,
+        *_interval(seed_end, friction_angle), state.dilatancy_end, float(e.mean()), *_interval(e), dr,
+        float(grid[-1]), preparation, "; ".join(notes))
+
+

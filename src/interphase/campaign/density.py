@@ -1,0 +1,102 @@
+"""The void ratios a soil card's grains reach by the cell's preparation (`campaign density CARD`):
+the model's own e_min and e_max, so that a relative density means for the model what it means for
+the laboratory (docs/soils.md, "Density by relative density").
+
+Protocol: the card's cell test (engines/cell.py: isotropic consolidation of a loose lattice with the
+grain–grain sliding and rolling friction scaled by the preparation), at REFERENCE_STRESS, for each of
+PREPARATIONS, on the seeds given; e is each run's void ratio at the start of its (token) axial
+compression, averaged over the seeds. e_min = e at preparation 0 (frictionless grains: the densest
+packing the protocol makes), e_max = e at preparation 1 (the grains' own friction: the loosest).
+The laboratory's index tests are made at next to no stress; the reference stress is low for the same
+reason (the model's soft grains overlap less: at 10 kPa their void ratio is within a few thousandths
+of what the same packing has unloaded, docs/soils.md). The map e(preparation) between them is what
+`preparation_at` inverts at the stress a test is consolidated to.
+
+The result is appended to the card as its [density] table; a card that has one keeps it (nothing
+measured is overwritten: delete the table to measure again).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+from interphase.campaign.element import run_cell_cases, write_campaign
+from interphase.soil import SoilCard
+
+PREPARATIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
+REFERENCE_STRESS = 10e3        # [Pa]
+TOKEN_STRAIN = 0.002           # [-] the axial compression these runs need only to record their start
+
+
+def measure_density(card: SoilCard, seeds, *, output: Path | None = None, executor=None, jobs=None,
+                    stream=None) -> dict:
+    seeds = [int(s) for s in seeds]
+    output = Path(output) if output else card.path.parent.parent / "runs" / "density" / card.name
+    _, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs, stream=stream)
+    e = [float(v) for v in e]
+    table = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(card.cell["n_grains"]),
+             "preparations": list(PREPARATIONS), "void_ratios": [round(v, 5) for v in e],
+             "e_min": round(e[0], 5), "e_max": round(e[-1], 5),
+             "method": "campaign density: isotropic consolidation of the card's cell at the reference stress, grain "
+                       "friction scaled by the preparation; e at the start of the axial compression, seed mean"}
+    written = _append(card, table)
+    return {"card": str(card.path), "written": written, **table}
+
+
+def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds, *, test: str | None = None,
+                   output: Path, executor=None, jobs=None, stream=None) -> float:
+    """The preparation whose specimen, consolidated to `stress` [Pa], has the void ratio of relative
+    density Dr on the card's limits: e = e_max − Dr (e_max − e_min). The map e(preparation) at that
+    stress is measured (token compressions at PREPARATIONS, `seeds`; resumable) and inverted linearly."""
+    from interphase.errors import InputError
+
+    e_min, e_max = card.void_ratio_limits
+    if not np.isfinite([e_min, e_max]).all():
+        raise InputError(f"the card {card.path.name} has no [density] table: its grains' e_min and e_max are not "
+                         "measured", where=str(card.path), fix=f"run `campaign density {card.path}` first")
+    if not 0 <= relative_density <= 1:
+        raise InputError(f"relative density {relative_density!r} is not a fraction in [0, 1]",
+                         where="--relative-density", fix="e.g. 0.81 for 81 %")
+    prep, e = void_ratio_map(card, stress, seeds, test=test, output=output, executor=executor, jobs=jobs,
+                             stream=stream)
+    target = e_max - relative_density * (e_max - e_min)
+    ok = np.isfinite(e)
+    order = np.argsort(e[ok])
+    if not (e[ok].min() <= target <= e[ok].max()):
+        raise InputError(f"relative density {relative_density:g} is e = {target:.4f} on the card's limits, outside what "
+                         f"its preparation makes at {stress / 1e3:g} kPa ({e[ok].min():.4f}–{e[ok].max():.4f})",
+                         where="--relative-density", fix="ask for a density within that range (docs/soils.md: the soft "
+                         "grains' squeeze at high stress)")
+    return round(float(np.interp(target, e[ok][order], np.asarray(prep)[ok][order])), 4)
+
+
+def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
+                   stream=None) -> tuple[list, np.ndarray]:
+    """(PREPARATIONS, seed-mean e at the start of a token compression at `stress` for each)."""
+    base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
+    base.pop("preparation", None), base.pop("seed")
+    name = f"density-{card.name}-{stress / 1e3:g}kPa"
+    path = write_campaign(Path(output) / f"{name}.toml", name=name, case=base,
+                          sweep={"preparation": list(PREPARATIONS), "seed": [int(s) for s in seeds]},
+                          description=f"void ratio against preparation of the soil card {card.path}")
+    planned, series, _ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream)
+    e = []
+    for prep in PREPARATIONS:
+        vals = [float(series[p.case_id]["e"].iloc[0]) for p in planned
+                if p.case.preparation == prep and p.case_id in series]
+        e.append(float(np.mean(vals)) if vals else float("nan"))
+    return list(PREPARATIONS), np.asarray(e)
+
+
+def _append(card: SoilCard, table: dict) -> bool:
+    """Append [density] to the card unless it has one (or a value is missing); True if written."""
+    if "density" in card.extra or not np.isfinite(table["void_ratios"]).all():
+        return False
+    text = card.path.read_text()
+    block = tomli_w.dumps({"density": table})
+    card.path.write_text(text.rstrip("\n") + "\n\n# the grains' own void-ratio limits (campaign density; docs/soils.md)\n"
+                         + block)
+    return True
