@@ -8,8 +8,8 @@ PREPARATIONS, on the seeds given; e is each run's void ratio at the start of its
 compression, averaged over the seeds. e_min = e at preparation 0 (frictionless grains: the densest
 packing the protocol makes), e_max = e at preparation 1 (the grains' own friction: the loosest).
 The laboratory's index tests are made at next to no stress; the reference stress is low for the same
-reason (the model's soft grains overlap less: at 10 kPa their void ratio is within a few thousandths
-of what the same packing has unloaded, docs/soils.md). The map e(preparation) between them is what
+reason (the model's soft grains overlap less there; how much e still moves with stress is measured in
+docs/soils.md). The map e(preparation) between them is what
 `preparation_at` inverts at the stress a test is consolidated to.
 
 The result is appended to the card as its [density] table; a card that has one keeps it (nothing
