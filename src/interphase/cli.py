@@ -625,8 +625,20 @@ def _cmd_predict(args) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse takes "-100e3" for an option (its negative-number pattern knows no exponent), so
+    `--normal-stress -100e3` failed with "expected one argument" instead of reaching the command's
+    own check ("must be > 0 Pa"). Every number, exponent or not, is a value here."""
+
+    def __init__(self, *args, **kwargs):
+        import re
+
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf$|^-nan$")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="campaign",
         description="DEM interface-shear campaigns (LIGGGHTS, YADE) and the θa → θr → E criterion.",
     )

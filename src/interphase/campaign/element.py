@@ -40,15 +40,17 @@ def write_campaign(path: Path, *, name: str, case: dict, sweep: dict | None = No
     return path
 
 
-def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None):
+def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None,
+              rerun_failed: bool = False):
     """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame}, summaries
-    table of the finished ones). Failed cases are reported by the run and left out of the results."""
+    table of the finished ones). Failed cases are reported by the run and left out of the results
+    (`failures` says why); `rerun_failed` runs them again."""
     from interphase.campaign.plan import plan
     from interphase.campaign.run import run_campaign
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False)
+    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False, rerun_failed=rerun_failed)
     campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}
@@ -90,16 +92,45 @@ def _start_order(folder: Path) -> float:
     return hexatic_order(first["x"].to_numpy(float), first["z"].to_numpy(float), first["radius"].to_numpy(float))
 
 
+def failures(path: Path) -> list[str]:
+    """One line per case of a generated campaign file that did not finish: its label, status and
+    the engine's cause and message as the runner recorded them."""
+    from interphase.campaign.schema import load_campaign
+    from interphase.campaign.store import INDEX, CampaignStore
+
+    campaign = load_campaign(path)
+    if not (campaign.output / INDEX).exists():
+        return []
+    with CampaignStore(campaign.output) as store:
+        rows = store.status()
+    bad = rows[~rows["status"].isin(("done", "pending"))]
+    return [f"{r.label}: {r.status}" + (f" ({r.cause})" if isinstance(r.cause, str) and r.cause else "")
+            + (f": {r.message}" if isinstance(r.message, str) and r.message else "") for r in bad.itertuples()]
+
+
 def run_element(card: SoilCard, normal_stresses, seeds, *, output: Path | None = None, executor: str | None = None,
-                jobs: int | None = None, stream=None) -> list[ElementResult]:
-    """The element test of `card` at each normal stress [Pa] on packing seeds `seeds`."""
-    output = Path(output) if output else Path("runs") / "element" / card.name
+                jobs: int | None = None, stream=None, rerun_failed: bool = False,
+                shear_velocity: float | None = None) -> list[ElementResult]:
+    """The element test of `card` at each normal stress [Pa] on packing seeds `seeds`, in `output`
+    (default: runs/element/NAME beside the card, campaign.folders); `shear_velocity` [m/s] replaces
+    the card's [element] speed."""
+    from interphase.campaign.folders import element_runs
+
+    output = element_runs(card.path, card.name, output)[0]
     stresses = [float(s) for s in normal_stresses]
-    base = card.element_case(stresses[0])
+    base = card.element_case(stresses[0], **({} if shear_velocity is None else {"shear_velocity": shear_velocity}))
     base.pop("normal_stress"), base.pop("seed")
     path = write_campaign(output / f"element-{card.name}.toml", name=f"element-{card.name}", case=base,
                           sweep={"normal_stress": stresses, "seed": [int(s) for s in seeds]},
                           description=f"element test of the soil card {card.path}")
-    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream)
+    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     return [element_of(cases, series, summ, cases[0].case.d50, s)
             for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
+
+
+def element_failures(card: SoilCard, output=None) -> list[str]:
+    """`failures` of the element test's generated file of `card` in `output` (run_element's folder)."""
+    from interphase.campaign.folders import element_runs
+
+    path = element_runs(card.path, card.name, output)[0] / f"element-{card.name}.toml"
+    return failures(path) if path.exists() else []
