@@ -86,14 +86,14 @@ def _cmd_element(args, print_json) -> int:
     from interphase.campaign.folders import element_runs
     from interphase.soil import load_card
 
+    card = load_card(args.card)
+    _quick_note(card, sys.stderr)
     _check_seeds(args.seeds)
     for s in args.normal_stress:
         _positive(s, "--normal-stress", "Pa", "100e3")
     if args.shear_velocity is not None:
         _positive(args.shear_velocity, "--shear-velocity", "m/s", "0.02")
-    card = load_card(args.card)
     stream = sys.stderr if args.json else sys.stdout
-    _quick_note(card, sys.stderr)
     runs, runs_from = element_runs(card.path, card.name, args.runs)
     print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
     results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=runs, executor=args.executor,
