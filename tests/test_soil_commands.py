@@ -219,3 +219,36 @@ def test_card_value_errors_name_line_and_table_once(tmp_path, capsys):
     err = capsys.readouterr().err
     line = next(i for i, ln in enumerate(bad.read_text().splitlines(), 1) if ln.startswith("friction_pp"))
     assert f"bad.toml:{line}: [soil] friction_pp" in err and "[soil]: [soil]" not in err
+
+
+# ---- item 5: plausibility at load, verdicts ------------------------------------------------------
+@pytest.mark.parametrize("old, new, field, words", [
+    ("phi_peak_deg = 38.0", "phi_peak_deg = 0.66", "phi_peak_deg", "radians"),
+    ("phi_peak_deg = 38.0", "phi_peak_deg = 85.0", "phi_peak_deg", "15–60°"),
+    ("phi_cs_deg = 28.0", "phi_cs_deg = 0.49", "phi_cs_deg", "radians"),
+    ("psi_max_deg = 15.0", "psi_max_deg = 40.0", "psi_max_deg", "not below φ_peak"),
+])
+def test_an_implausible_target_exits_2_before_anything_runs(tmp_path, capsys, no_engine, old, new, field, words):
+    """A target in radians (φ_peak 0.66) or at 85° loaded without a word and would spend 149 runs."""
+    text = (DATA / "tiny_target.toml").read_text()
+    assert old in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(old, new, 1))
+    assert main(["calibrate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    line = next(i for i, ln in enumerate(bad.read_text().splitlines(), 1) if ln.startswith(field))
+    assert f"bad.toml:{line}: [target] {field}" in err and words in err and no_engine == []
+
+
+def test_a_verdict_says_within_only_with_an_interval_inside_the_tolerance():
+    """A --quick card called a 37°-wide interval "within"."""
+    from interphase.campaign.calibrate import compare
+
+    lab = {"phi_peak_deg": 38.0}
+    verdict = lambda r: compare(lab, r)[0]["verdict"]
+    assert verdict(_element(phi_peak=38.5, width=0.8)) == "within"
+    assert verdict(_element(phi_peak=38.5, width=18.5)) == "undecided"         # the point within, the interval not
+    one_seed = _element(phi_peak=38.0)
+    one_seed = type(one_seed)(**{**one_seed.__dict__, "phi_peak_deg_lo": math.nan, "phi_peak_deg_hi": math.nan})
+    assert verdict(one_seed) == "undecided"
+    assert verdict(_element(phi_peak=45.0, width=1.0)) == "outside"

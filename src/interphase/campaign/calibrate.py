@@ -95,19 +95,7 @@ def load_target(path) -> Target:
     sigma = t.get("normal_stress")
     if not isinstance(sigma, (int, float)) or not sigma > 0:
         raise bad("target", "normal_stress", f"must be a stress > 0 in Pa, got {sigma!r}", "e.g. normal_stress = 100e3")
-    values = {}
-    for q in QUANTITIES:
-        if q in t:
-            v = t[q]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 90:
-                raise bad("target", q, f"must be an angle in degrees in [0, 90), got {v!r}")
-            values[q] = float(v)
-    for q in QUANTITIES[:2]:
-        if q not in values:
-            raise bad("target", q, f"{q} is missing", "the calibration needs φ_peak and φ_cs at the target stress")
-    if values["phi_cs_deg"] > values["phi_peak_deg"]:
-        raise bad("target", "phi_cs_deg", f"φ_cs {values['phi_cs_deg']}° exceeds φ_peak {values['phi_peak_deg']}°",
-                  "φ_cs ≤ φ_peak: check the two values against their source")
+    values = target_angles(t, lambda q, msg, fix=None: bad("target", q, msg, fix))
     soil = soil_fields(data.get("soil", {}), bad, f"use {', '.join(SOIL_FIELDS)}")
     free = {}
     for key, rng in data.get("free", {}).items():
@@ -144,6 +132,8 @@ def load_target(path) -> Target:
                              fix="give source = \"Author (year), table or figure\"")
         if not isinstance(v.get("normal_stress"), (int, float)) or not v["normal_stress"] > 0:
             raise InputError("needs normal_stress > 0 [Pa]", where=f"{p}: [[verification]] #{i + 1}")
+        target_angles(v, lambda q, msg, fix=None, i=i: InputError(msg, where=f"{p}: [[verification]] #{i + 1}: {q}",
+                                                                   fix=fix), required=())
         verification.append(dict(v))
     # the grains must make a valid Case with every free field at its bounds
     probe = SoilCard(name=str(name), path=p, soil={**soil, **{k: r[0] for k, r in free.items()}}, element=element)
@@ -152,6 +142,44 @@ def load_target(path) -> Target:
     case_from_dict(probe.element_case(float(sigma)), where=f"{p}: [soil]")
     return Target(p, str(name), float(sigma), values, str(t["source"]), soil, free, element, budget,
                   tuple(verification), raw=data)
+
+
+#: plausible laboratory friction angles of a soil [°] (sands, gravels, glass beads: 20–50°, with room)
+PLAUSIBLE_PHI_DEG = (15.0, 60.0)
+
+
+def target_angles(t: dict, bad, required=QUANTITIES[:2]) -> dict:
+    """The laboratory angles of a [target] table (or a verification row), checked at load: numbers
+    in degrees, φ within PLAUSIBLE_PHI_DEG (a value below 1.6 reads as radians and is said so),
+    φ_cs ≤ φ_peak and ψ_max below φ_peak. `bad(key, message, fix)` builds the InputError."""
+    values = {}
+    for q in QUANTITIES:
+        if q not in t:
+            continue
+        v = t[q]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise bad(q, f"must be an angle in degrees, got {v!r}")
+        lo, hi = PLAUSIBLE_PHI_DEG
+        if q != "psi_max_deg" and 0 < v < 1.6:
+            raise bad(q, f"{v!r} looks like radians ({math.degrees(v):.1f}°)", f"give degrees: {q} = "
+                      f"{math.degrees(v):.1f}")
+        if q != "psi_max_deg" and not lo <= v <= hi:
+            raise bad(q, f"{v!r}° is outside the plausible {lo:g}–{hi:g}° of a soil's friction angle",
+                      "check the value against its source (degrees, direct-shear φ)")
+        if q == "psi_max_deg" and not -hi < v < hi:
+            raise bad(q, f"{v!r}° is not a plausible dilatancy angle", "check the value against its source (degrees)")
+        values[q] = float(v)
+    for q in required:
+        if q not in values:
+            raise bad(q, f"{q} is missing", "the calibration needs φ_peak and φ_cs at the target stress")
+    peak = values.get("phi_peak_deg")
+    if peak is not None and values.get("phi_cs_deg", -math.inf) > peak:
+        raise bad("phi_cs_deg", f"φ_cs {values['phi_cs_deg']}° exceeds φ_peak {peak}°",
+                  "φ_cs ≤ φ_peak: check the two values against their source")
+    if peak is not None and values.get("psi_max_deg", -math.inf) >= peak:
+        raise bad("psi_max_deg", f"ψ_max {values['psi_max_deg']}° is not below φ_peak {peak}°",
+                  "a soil dilates at less than its friction angle: check the value against its source")
+    return values
 
 
 def _weighted_quantile(x: np.ndarray, w: np.ndarray, q: float) -> float:
@@ -357,15 +385,16 @@ def _sample(plan: Plan, executor, jobs, stream, rerun_failed: bool):
 def compare(lab: dict, measured) -> list[dict]:
     """Each laboratory angle of `lab` against the element test `measured` (an ElementResult):
     difference [°] (measured − laboratory), and the verdict against TOLERANCES: "within" when the
-    point lies within the tolerance, "outside" when the whole 95 % interval lies beyond it, else
-    "undecided" (more seeds would tell)."""
+    whole 95 % interval lies within the tolerance of the laboratory value (so it is narrower than
+    twice the tolerance; one seed has no interval and decides nothing), "outside" when the whole
+    interval lies beyond it, else "undecided" (more seeds would tell)."""
     out = []
     for q in QUANTITIES:
         if q not in lab:
             continue
         v, lo, hi = (getattr(measured, q + k) for k in ("", "_lo", "_hi"))
         d, tol = v - float(lab[q]), TOLERANCES[q]
-        if abs(d) <= tol:
+        if math.isfinite(lo) and math.isfinite(hi) and lab[q] - tol <= lo and hi <= lab[q] + tol:
             verdict = "within"
         elif math.isfinite(lo) and (lo - lab[q] > tol or lab[q] - hi > tol):
             verdict = "outside"
