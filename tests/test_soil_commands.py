@@ -252,3 +252,17 @@ def test_a_verdict_says_within_only_with_an_interval_inside_the_tolerance():
     one_seed = type(one_seed)(**{**one_seed.__dict__, "phi_peak_deg_lo": math.nan, "phi_peak_deg_hi": math.nan})
     assert verdict(one_seed) == "undecided"
     assert verdict(_element(phi_peak=45.0, width=1.0)) == "outside"
+
+
+def test_the_shipped_full_card_is_read_back_not_replaced(capsys, no_engine):
+    """The issue's case: `campaign calibrate soils/targets/synthetic-recovery.toml --quick` replaced the
+    shipped card (149 runs, 34 min) with a 6-run quick card."""
+    root = Path(__file__).resolve().parents[1]
+    target, card = root / "soils" / "targets" / "synthetic-recovery.toml", root / "soils" / "synthetic-recovery.toml"
+    before = _sha(card)
+    assert main(["calibrate", str(target), "--json"]) == 0           # this card's own calibration: read back
+    res = json.loads(capsys.readouterr().out)
+    assert res["reused"] and res["calibration"]["runs"] == 149 and no_engine == []
+    assert {a["verdict"] for a in res["achieved"]} == {"undecided"}   # today's rule: intervals wider than ±1.5°
+    assert main(["calibrate", str(target), "--quick", "-o", str(card)]) == 2
+    assert "never replaces" in capsys.readouterr().err and _sha(card) == before

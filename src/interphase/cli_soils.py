@@ -144,11 +144,11 @@ def _cmd_calibrate(args, print_json) -> int:
         print(f"  {k} = {v:.4g} ({post.get('lo', nan):.4g}–{post.get('hi', nan):.4g})")
     for a in result["achieved"]:
         print(f"  {a['quantity']}: target {a['target']:.1f}°, achieved {a['value']:.1f}° "
-              f"({a.get('lo', nan):.1f}–{a.get('hi', nan):.1f}): {a['verdict']}")
+              f"({a.get('lo', nan):.1f}–{a.get('hi', nan):.1f}): {a.get('verdict', '?')}")
     for v in result["verification"]:
         for c in v["checks"]:
             print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
-                  f"measured {c['measured']:.1f}° ({c.get('lo', nan):.1f}–{c.get('hi', nan):.1f}): {c['verdict']}")
+                  f"measured {c['measured']:.1f}° ({c.get('lo', nan):.1f}–{c.get('hi', nan):.1f}): {c.get('verdict', '?')}")
     return 0
 
 

@@ -286,8 +286,10 @@ def existing_card(plan: Plan) -> dict | None:
                 "budget": cal.get("budget"), "quick": cal.get("quick", False)}
         if held == plan.identity():
             names = list(plan.target.free)
+            achieved = [a | {"verdict": verdict(a["target"], a.get("lo"), a.get("hi"), TOLERANCES[a["quantity"]])}
+                        for a in ext.get("achieved", [])]      # judged by today's rule, whenever written
             return {"card": str(path), "target": plan.target.name, "chosen": {n: card.soil[n] for n in names},
-                    "posterior": ext.get("posterior", {}), "achieved": ext.get("achieved", []),
+                    "posterior": ext.get("posterior", {}), "achieved": achieved,
                     "verification": ext.get("verification", []), "calibration": cal, "reused": True}
     what = ("a soil card of another calibration" + (f" ({cal.get('runs', '?')} runs"
                                                     + (", --quick" if cal.get("quick") else "") + ")" if cal else "")
@@ -394,15 +396,21 @@ def compare(lab: dict, measured) -> list[dict]:
             continue
         v, lo, hi = (getattr(measured, q + k) for k in ("", "_lo", "_hi"))
         d, tol = v - float(lab[q]), TOLERANCES[q]
-        if math.isfinite(lo) and math.isfinite(hi) and lab[q] - tol <= lo and hi <= lab[q] + tol:
-            verdict = "within"
-        elif math.isfinite(lo) and (lo - lab[q] > tol or lab[q] - hi > tol):
-            verdict = "outside"
-        else:
-            verdict = "undecided"
         out.append({"quantity": q, "laboratory": float(lab[q]), "measured": v, "lo": lo, "hi": hi,
-                    "difference": d, "tolerance": tol, "verdict": verdict})
+                    "difference": d, "tolerance": tol, "verdict": verdict(float(lab[q]), lo, hi, tol)})
     return out
+
+
+def verdict(lab: float, lo, hi, tol: float) -> str:
+    """"within" when the interval [lo, hi] lies inside lab ± tol, "outside" when it lies wholly
+    beyond, else "undecided" (no interval: one seed decides nothing)."""
+    lo = math.nan if lo is None else float(lo)
+    hi = math.nan if hi is None else float(hi)
+    if math.isfinite(lo) and math.isfinite(hi) and lab - tol <= lo and hi <= lab + tol:
+        return "within"
+    if (math.isfinite(lo) and lo - lab > tol) or (math.isfinite(hi) and lab - hi > tol):
+        return "outside"
+    return "undecided"
 
 
 def _iterate(calib, iterations: int) -> None:
