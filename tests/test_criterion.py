@@ -71,8 +71,9 @@ def test_fitted_chain_uses_the_friction_fit_and_gives_intervals(fitted):
     q = predict(fitted, 0.3, 0.0, 0.0)          # between the 0.2 and 0.5 fits: interpolated, said so
     assert any("interpolated" in n for n in q.notes)
     assert q.theta_r_deg == pytest.approx(math.degrees(math.atan(0.3)), abs=1.5)   # intercept ≈ φμ
-    r = predict(fitted, 0.9, 20.0, 19.0)        # outside every fitted friction: the pooled fit, said so
-    assert any("pooled" in n for n in r.notes)
+    with pytest.raises(InputError, match="0.05–0.5") as exc:    # outside every fitted friction: refused
+        predict(fitted, 0.9, 20.0, 19.0)
+    assert "frictions" in str(exc.value) and "θa" in str(exc.value)
 
 
 def test_fitted_flat_spaced_branch(fitted):

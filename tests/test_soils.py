@@ -188,9 +188,12 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     from interphase.soil import load_card
 
     monkeypatch.chdir(tmp_path)
-    assert main(["calibrate", str(DATA / "tiny_target.toml"), "--quick", "--json"]) == 0
+    target = tmp_path / "tiny.toml"
+    shutil.copy(DATA / "tiny_target.toml", target)
+    assert main(["calibrate", str(target), "--quick", "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
-    card = load_card(tmp_path / "soils" / "tiny.toml")
+    card = load_card(tmp_path / "soils" / "tiny-quick.toml")         # beside the target; a quick card says so
+    assert card.quick and card.name == "tiny-quick" and card.path.read_text().startswith("# QUICK")
     assert card.extra["target"]["source"].startswith("synthetic")
     for k, (lo, hi) in {"friction_pp": (0.3, 0.8), "rolling_friction": (0.2, 0.8)}.items():
         assert lo <= card.soil[k] <= hi and lo <= res["posterior"][k]["lo"] <= res["posterior"][k]["hi"] <= hi
@@ -198,13 +201,19 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     (check,) = res["verification"][0]["checks"]
     assert check["quantity"] == "phi_peak_deg" and check["verdict"] in ("within", "outside", "undecided")
     assert check["difference"] == pytest.approx(check["measured"] - 37.0)
-    # again: the same samples are drawn, every run is reused, the same card comes out
-    assert main(["calibrate", str(DATA / "tiny_target.toml"), "--quick", "--json"]) == 0
+    runs = tmp_path / "runs" / "calibrate" / "tiny-quick"
+    assert (runs / "element").is_dir() and (runs / "samples-quick.csv").is_file()   # --runs governs every run
+    # again: the card is this calibration's: read back, nothing rerun, the card unchanged
+    before = card.path.read_bytes()
+    assert main(["calibrate", str(target), "--quick", "--json"]) == 0
     captured = capsys.readouterr()
-    assert json.loads(captured.out)["chosen"] == res["chosen"] and "to run" in captured.err
-    assert all(" 0 to run" in ln for ln in captured.err.splitlines() if " to run [" in ln)
-    assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
-    measured = json.loads(capsys.readouterr().out)
+    assert json.loads(captured.out)["chosen"] == res["chosen"] and "read back" in captured.err
+    assert " to run [" not in captured.err and card.path.read_bytes() == before
+    assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "2", "--runs", str(runs / "element"),
+                 "--json"]) == 0
+    captured = capsys.readouterr()
+    measured = json.loads(captured.out)
+    assert " 0 to run" in captured.err                               # the calibration's own element runs
     for a in res["achieved"]:
         assert measured[a["quantity"]] == pytest.approx(a["value"], abs=1e-9)
 

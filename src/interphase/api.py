@@ -136,66 +136,102 @@ def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | Non
     return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
 
 
-def element(card: PathLike, normal_stress: float | list[float], seeds: int = 3, *, runs: PathLike | None = None):
+def element(card: PathLike, normal_stress: float | list[float], seeds: int = 3, *, runs: PathLike | None = None,
+            shear_velocity: float | None = None, executor: str | None = None, jobs: int | None = None,
+            rerun_failed: bool = False):
     """The element test of a soil card (docs/soils.md) at one or more normal stresses [Pa], packing
-    seeds 1…`seeds`: a list of dicts with phi_peak_deg, phi_cs_deg, psi_max_deg and solid_fraction
-    (each with _lo/_hi, 95 % over the seeds), has_peak, order_psi6 and a note. Resumable."""
+    seeds 1…`seeds`, as `campaign element`: a list of dicts with phi_peak_deg, phi_cs_deg,
+    psi_max_deg and solid_fraction (each with _lo/_hi, 95 % over the seeds), has_peak, order_psi6
+    and a note. `runs`: the runs folder (default runs/element/NAME beside the card);
+    `shear_velocity` [m/s] replaces the card's speed. Resumable. Bad input raises InputError before
+    anything is written."""
+    import math
+
     from interphase.campaign.element import run_element
+    from interphase.errors import InputError
     from interphase.soil import load_card
 
-    stresses = normal_stress if isinstance(normal_stress, (list, tuple)) else [normal_stress]
-    return [r.to_dict() for r in run_element(load_card(card), stresses, range(1, int(seeds) + 1), output=runs)]
+    stresses = list(normal_stress) if isinstance(normal_stress, (list, tuple)) else [normal_stress]
+    for s in stresses:
+        if not (isinstance(s, (int, float)) and math.isfinite(s) and s > 0):
+            raise InputError(f"must be > 0 Pa, got {s!r}", where="normal_stress", fix="e.g. 100e3")
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+        raise InputError(f"must be an integer ≥ 1, got {seeds!r}", where="seeds")
+    if shear_velocity is not None and not (math.isfinite(shear_velocity) and shear_velocity > 0):
+        raise InputError(f"must be > 0 m/s, got {shear_velocity!r}", where="shear_velocity")
+    return [r.to_dict() for r in run_element(load_card(card), stresses, range(1, seeds + 1), output=runs,
+                                             executor=executor, jobs=jobs, rerun_failed=rerun_failed,
+                                             shear_velocity=shear_velocity)]
 
 
-def calibrate(target: PathLike, *, quick: bool = False, card: PathLike | None = None, runs: PathLike | None = None):
-    """Calibrate grain parameters to a laboratory target (docs/soils.md); writes the soil card and
-    returns what it holds (chosen parameters, posterior, achieved and held-out checks). Resumable."""
+def calibrate(target: PathLike, *, quick: bool = False, output: PathLike | None = None,
+              runs: PathLike | None = None, executor: str | None = None, jobs: int | None = None,
+              rerun_failed: bool = False):
+    """Calibrate grain parameters to a laboratory target (docs/soils.md), as `campaign calibrate`;
+    writes the soil card and returns what it holds (chosen parameters, posterior, achieved and
+    held-out checks). `output`: the card (default [target] card, else soils/NAME.toml beside the
+    target; NAME-quick with `quick`); `runs`: every run's folder. A card already there is read back
+    when it is this calibration's, else refused (InputError): no card is ever replaced. Resumable."""
     from interphase.campaign.calibrate import calibrate as _calibrate
 
-    return _calibrate(target, quick=quick, card_path=card, output=runs)
+    return _calibrate(target, quick=quick, card_path=output, output=runs, executor=executor, jobs=jobs,
+                      rerun_failed=rerun_failed)
 
 
-#: shipped soil cards by a laboratory soil's name (soils/ of the source tree or the working folder)
+#: shipped soil cards by a laboratory soil's name (soils/ beside the lab file's folder, or of the source tree)
 SHIPPED_CARDS = (("ottawa", "ottawa-20-30.toml"), ("glass", "glass-beads-0.7.toml"))
 
 
-def _shipped_card(soils):
+def _shipped_card(soils, lab_path: Path):
     """The one shipped card whose name matches every soil of a lab file, or None."""
     found = set()
+    roots = (lab_path.resolve().parent / "soils", lab_path.resolve().parent.parent / "soils",
+             Path(__file__).resolve().parents[2] / "soils")
     for soil in soils:
         name = next((card for key, card in SHIPPED_CARDS if key in str(soil).lower()), None)
-        roots = (Path.cwd() / "soils", Path(__file__).resolve().parents[2] / "soils")
         found.add(next((r / name for r in roots if name and (r / name).is_file()), None))
     return found.pop() if len(found) == 1 else None
 
 
-def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = None, simulate: bool = False,
-             seeds: int = 3, output: PathLike | None = None, executor: str | None = None, jobs: int | None = None,
-             stream=None) -> dict:
-    """The criterion (and with `simulate`, the DEM on the soil card) against a laboratory file
-    (lab/README.md; docs/validation.md), as `campaign validate`. Returns a dict: table (DataFrame, one
-    row per test: δ measured, predicted with its interval, both baselines, errors [°]), skill
-    (DataFrame), largest_miss, notes, folder and files written (validation.csv, skill.csv,
-    validation.md, validation.png/.pdf under `output`, default runs/validate/<file name>)."""
-    from interphase.analysis.validation import largest_miss, predict_rows, skill
+def _validation_card(table, soil, simulate: bool, notes: list):
     from interphase.errors import InputError
-    from interphase.lab import read_lab
-    from interphase.report.build import criterion_model
-    from interphase.report.validation import markdown, validation_figure
     from interphase.soil import load_card
 
-    table = read_lab(lab)
-    out = Path(output) if output else Path("runs") / "validate" / table.path.stem
-    notes: list[str] = []
     card = load_card(soil) if soil else None
     if card is None:
-        shipped = _shipped_card(sorted(set(table.rows["soil"])))
+        shipped = _shipped_card(sorted(set(table.rows["soil"])), table.path)
         card = load_card(shipped) if shipped else None
         if card is not None:
             notes.append(f"soil card: {card.path} (shipped, chosen by the soil's name; soil= to choose)")
         elif simulate or table.rows["soil_phi_peak"].isna().any():
             raise InputError(f"no single shipped card for the soils {', '.join(sorted(set(table.rows['soil'])))}",
                              where="--soil", fix="give --soil soils/NAME.toml")
+    if card is not None and card.quick:
+        notes.append(f"soil card {card.path} is a --quick calibration: a first look, not a calibrated soil")
+    return card
+
+
+def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = None, simulate: bool = False,
+             seeds: int = 3, output: PathLike | None = None, runs: PathLike | None = None,
+             executor: str | None = None, jobs: int | None = None, rerun_failed: bool = False,
+             stream=None) -> dict:
+    """The criterion (and with `simulate`, the DEM on the soil card) against a laboratory file
+    (lab/README.md; docs/validation.md), as `campaign validate`. Returns a dict: table (DataFrame, one
+    row per test: δ measured, predicted with its interval, both baselines, errors [°]), skill
+    (DataFrame), largest_miss, notes, folder and files written (validation.csv, skill.csv,
+    validation.md, validation.png/.pdf under `output`, default runs/validate/<file name> beside the
+    lab file; --simulate's runs in `runs`, default runs/validate/<file name>/runs beside it). A
+    folder holding another validation is refused (InputError), one holding this same one is kept."""
+    from interphase.analysis.validation import largest_miss, predict_rows, skill
+    from interphase.campaign.folders import validate_folders
+    from interphase.lab import read_lab
+    from interphase.report.build import criterion_model
+
+    table = read_lab(lab)
+    (out, out_from), (runs_at, runs_from) = validate_folders(table.path, output, runs)
+    _check_validation_folder(out)
+    notes: list[str] = [f"folder {out} ({out_from})"]
+    card = _validation_card(table, soil, simulate, notes)
     models: dict = {}
     model_for = lambda mu: models[mu] if mu in models else models.setdefault(mu, criterion_model(mu, fit))
     df = predict_rows(table, model_for, card)
@@ -203,24 +239,60 @@ def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = N
     if simulate:
         from interphase.campaign.validate import simulate as _simulate, with_dem
 
-        df = with_dem(df, _simulate(table, card, range(1, int(seeds) + 1), output=out / "runs", executor=executor,
-                                    jobs=jobs, stream=stream))
+        notes.append(f"DEM runs in {runs_at} ({runs_from})")
+        df = with_dem(df, _simulate(table, card, range(1, int(seeds) + 1), output=runs_at, executor=executor,
+                                    jobs=jobs, stream=stream, rerun_failed=rerun_failed))
     sk = skill(df)
-    out.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out / "validation.csv", index=False)
-    sk.to_csv(out / "skill.csv", index=False)
+    files, kept = _write_validation(out, df, sk)
+    return {"lab": str(table.path), "rows": len(df), "folder": out, "folder_from": out_from, "notes": notes,
+            "table": df, "skill": sk, "largest_miss": largest_miss(df), "files": files, "kept": kept}
+
+
+VALIDATION_FILES = ("validation.csv", "skill.csv", "validation.md")
+
+
+def _check_validation_folder(out: Path) -> None:
+    """Refuse a folder that holds anything but a validation (and its runs/): nothing finished is replaced."""
+    from interphase.campaign.folders import next_free
+    from interphase.errors import InputError
+
+    if not out.is_dir():
+        return
+    other = [p.name for p in out.iterdir() if p.name != "runs" and p.name not in VALIDATION_FILES
+             and not p.name.startswith("validation.")]
+    if other:
+        raise InputError(f"{out} is not empty and holds no validation ({', '.join(sorted(other)[:3])} …)",
+                         where=f"-o {out}", fix=f"give a new or empty folder, e.g. -o {next_free(out)}")
+
+
+def _write_validation(out: Path, df, sk) -> tuple[list, bool]:
+    """Write the tables and the figure into `out`; ([files], kept). A finished validation there is
+    kept when it is this one (the same tables), else refused: it is never replaced."""
+    from interphase.campaign.folders import next_free
+    from interphase.errors import InputError
+    from interphase.report.validation import markdown, validation_figure
+
     cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
             "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
             "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
             "delta_soil_deg": "δ = φ [°]"}
     if "delta_dem_deg" in df:
         cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
-    (out / "validation.md").write_text(markdown(df, cols) + "\n" + markdown(sk, {
-        "subset": "rows", "prediction": "prediction", "n": "n", "rms_deg": "rms [°]", "max_abs_deg": "max [°]",
-        "within_4": "share within 4°"}))
-    files = [out / "validation.csv", out / "skill.csv", out / "validation.md", *validation_figure(df, out)]
-    return {"lab": str(table.path), "rows": len(df), "folder": out, "notes": notes, "table": df, "skill": sk,
-            "largest_miss": largest_miss(df), "files": files}
+    texts = {"validation.csv": df.to_csv(index=False), "skill.csv": sk.to_csv(index=False),
+             "validation.md": markdown(df, cols) + "\n" + markdown(sk, {
+                 "subset": "rows", "prediction": "prediction", "n": "n", "rms_deg": "rms [°]",
+                 "max_abs_deg": "max [°]", "within_4": "share within 4°"})}
+    held = {name: (out / name).read_text() for name in VALIDATION_FILES if (out / name).is_file()}
+    if held:
+        if held == texts:
+            return [out / name for name in VALIDATION_FILES] + sorted(out.glob("validation.p*")), True
+        raise InputError(f"{out} holds another validation (its tables differ from this one's); it is kept",
+                         where=f"-o {out}", fix=f"write this one to a new folder, e.g. -o {next_free(out)} "
+                         "(--simulate's runs are reused: they live in --runs)")
+    out.mkdir(parents=True, exist_ok=True)
+    for name, text in texts.items():
+        (out / name).write_text(text)
+    return [out / name for name in VALIDATION_FILES] + list(validation_figure(df, out)), False
 
 
 def lab_record(path: PathLike, *, e0: float | None = None) -> dict:

@@ -308,8 +308,8 @@ def _add_campaign(sub) -> None:
     p.add_argument("--render", action="store_true", help="with --dry-run: write the decks of the cases that would run")
     p.add_argument("--list", action="store_true", dest="list_all", help="with --dry-run: list every case, not a sample")
     p.add_argument("--yes", action="store_true", help="go on with a campaign of more than 10000 cases")
-    p.add_argument("--runs", "--output", dest="runs", default=None, metavar="DIR",
-                   help=RUNS_HELP + "; --output is the same: what `run` writes")
+    p.add_argument("--runs", "-o", "--output", dest="runs", default=None, metavar="DIR",
+                   help=RUNS_HELP + "; -o/--output is the same: what `run` writes")
     p.add_argument("--plain", action="store_true", help="plain progress lines even on a terminal")
     p.add_argument("--json", action="store_true", help="progress on stderr, then one JSON summary on stdout")
     p.add_argument("--restore", default=None, metavar="SUMMARIES_CSV",
@@ -456,8 +456,8 @@ def _add_crosscheck(sub) -> None:
                        "(agree / differ / undecided per metric)")
     p.add_argument("campaign", help="campaign file (TOML) with an optional [crosscheck] table of tolerances")
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: the file's, else one per core)")
-    p.add_argument("--runs", "--output", dest="runs", default=None, metavar="DIR",
-                   help=RUNS_HELP + "; --output is the same: what `crosscheck` writes (and crosscheck.csv there)")
+    p.add_argument("--runs", "-o", "--output", dest="runs", default=None, metavar="DIR",
+                   help=RUNS_HELP + "; -o/--output is the same: what `crosscheck` writes (and crosscheck.csv there)")
     p.add_argument("--rerun-failed", action="store_true", help="run failed cases again")
     p.add_argument("--no-run", action="store_true", help="compare what has finished; run nothing")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -625,8 +625,20 @@ def _cmd_predict(args) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse takes "-100e3" for an option (its negative-number pattern knows no exponent), so
+    `--normal-stress -100e3` failed with "expected one argument" instead of reaching the command's
+    own check ("must be > 0 Pa"). Every number, exponent or not, is a value here."""
+
+    def __init__(self, *args, **kwargs):
+        import re
+
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-inf$|^-nan$")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="campaign",
         description="DEM interface-shear campaigns (LIGGGHTS, YADE) and the θa → θr → E criterion.",
     )

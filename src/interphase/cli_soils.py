@@ -22,24 +22,28 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--relative-density", type=float, default=None, metavar="DR",
                    help="triaxial/biaxial: relative density, a fraction (default: the card's preparation)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
-    _run_options(p, runs="runs/element/<card name>")
+    p.add_argument("--shear-velocity", type=float, default=None, metavar="M/S",
+                   help="shear speed [m/s] (default: the card's [element] speed, else 0.02: quasi-static)")
+    _run_options(p, runs="runs/element/<card name> beside the card")
     p.set_defaults(func=lambda a: _cmd_element(a, print_json))
 
     p = sub.add_parser("density", help="the void ratios a card's grains reach by the cell's preparation: e_min "
                        "(frictionless), e_max (the grains' own friction) and between; written into the card's [density]")
     p.add_argument("card", help="soil card (soils/NAME.toml)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
-    _run_options(p, runs="runs/density/<card name>")
+    _run_options(p, runs="runs/density/<card name> beside the card")
     p.set_defaults(func=lambda a: _cmd_density(a, print_json))
 
     p = sub.add_parser("calibrate", help="calibrate grain parameters to a laboratory soil (GrainLearning: "
                        "Bayesian, iterative); writes a soil card with its posterior")
     p.add_argument("target", help="calibration target (TOML: soil, laboratory values with their source, free "
                    "parameters with ranges)")
-    p.add_argument("--quick", action="store_true", help="the smallest budget (tests, a first look)")
+    p.add_argument("--quick", action="store_true", help="the smallest budget (tests, a first look); the card is "
+                   "NAME-quick and says so")
     p.add_argument("-o", "--output", default=None, metavar="CARD",
-                   help="the soil card to write (default: soils/<target name>.toml)")
-    _run_options(p, runs="runs/calibrate/<target name>")
+                   help="the soil card to write, never over another card (default: [target] card, else "
+                   "soils/<target name>.toml beside the target file)")
+    _run_options(p, runs="[target] runs, else runs/calibrate/<target name> beside the target file")
     p.set_defaults(func=lambda a: _cmd_calibrate(a, print_json))
 
     p = sub.add_parser("validate", help="the criterion (and, with --simulate, the DEM on the calibrated soil) "
@@ -52,8 +56,9 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--simulate", action="store_true", help="also run every row in the DEM on the card's soil")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N for --simulate (default 3)")
     p.add_argument("-o", "--output", default=None, metavar="DIR",
-                   help="folder for the table, figure and runs (default: runs/validate/<lab file name>)")
-    _run_options(p)
+                   help="folder for the table and figure, new or holding this same validation (default: "
+                   "runs/validate/<lab file name> beside the lab file)")
+    _run_options(p, runs="runs/validate/<lab file name>/runs beside the lab file; --simulate's runs")
     p.set_defaults(func=lambda a: _cmd_validate(a, print_json))
 
     p = sub.add_parser("lab-record", help="a laboratory drained triaxial record (lab/soils/): φ_peak, ε1 at peak, "
@@ -63,13 +68,13 @@ def add_soils(sub, print_json) -> None:
     p.set_defaults(func=lambda a: _cmd_lab_record(a, print_json))
 
 
-def _run_options(p, runs: str | None = None) -> None:
-    """The options every soil command that runs cases takes: where (--runs, when `runs` names its
-    default folder), how (--executor, --jobs) and how it prints (--json)."""
-    if runs is not None:
-        p.add_argument("--runs", default=None, metavar="DIR", help=f"runs folder (default: {runs})")
+def _run_options(p, runs: str) -> None:
+    """The options every soil command that runs cases takes: where (--runs: every run the command
+    makes), how (--executor, --jobs, --rerun-failed) and how it prints (--json)."""
+    p.add_argument("--runs", default=None, metavar="DIR", help=f"runs folder of every run (default: {runs})")
     p.add_argument("--executor", choices=("local", "slurm"), default=None)
     p.add_argument("--jobs", type=int, default=None, help="cases at a time (default: one per core)")
+    p.add_argument("--rerun-failed", action="store_true", help="run failed cases again")
     p.add_argument("--json", action="store_true", help="print JSON")
 
 
@@ -80,11 +85,31 @@ def _check_seeds(n: int) -> None:
         raise InputError(f"must be ≥ 1, got {n}", where="--seeds", fix="give the number of packing seeds, e.g. 3")
 
 
+def _positive(value, flag: str, unit: str, example: str) -> None:
+    import math
+
+    from interphase.errors import InputError
+
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"must be > 0 {unit}, got {value!r}", where=flag, fix=f"e.g. {flag} {example}")
+
+
+def _quick_note(card, stream) -> None:
+    """Every command that reads a --quick card says so."""
+    if card.quick:
+        runs = card.extra.get("calibration", {}).get("runs", "?")
+        print(f"warning: {card.path} is a --quick calibration ({runs} runs): a first look, not a calibrated soil",
+              file=stream)
+
+
 def _cmd_element(args, print_json) -> int:
-    from interphase.campaign.element import run_element
+    from interphase.campaign.element import element_failures, run_element
+    from interphase.campaign.folders import element_runs
     from interphase.errors import InputError
     from interphase.soil import load_card
 
+    card = load_card(args.card)
+    _quick_note(card, sys.stderr)
     _check_seeds(args.seeds)
     if args.test in ("triaxial", "biaxial") or (args.confining_stress and args.test is None):
         return _cmd_cell(args, print_json)
@@ -92,41 +117,60 @@ def _cmd_element(args, print_json) -> int:
         raise InputError("no stress given", where="--normal-stress",
                          fix="direct shear: --normal-stress PA; the laboratory's test: --confining-stress PA")
     for s in args.normal_stress:
-        if not s > 0:
-            raise InputError(f"must be > 0 Pa, got {s!r}", where="--normal-stress", fix="e.g. --normal-stress 100e3")
-    card = load_card(args.card)
-    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=args.runs,
-                          executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+        _positive(s, "--normal-stress", "Pa", "100e3")
+    if args.shear_velocity is not None:
+        _positive(args.shear_velocity, "--shear-velocity", "m/s", "0.02")
+    stream = sys.stderr if args.json else sys.stdout
+    runs, runs_from = element_runs(card.path, card.name, args.runs)
+    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
+    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=runs, executor=args.executor,
+                          jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed,
+                          shear_velocity=args.shear_velocity)
+    failed = element_failures(card, runs) if any(r.n_seeds < args.seeds for r in results) else []
+    for line in failed:
+        print(f"failed: {line}", file=sys.stderr)
+    if failed:
+        print("(a failed run is kept; `campaign element … --rerun-failed` runs it again)", file=sys.stderr)
     if args.json:
-        rows = [r.to_dict() for r in results]
+        rows = [r.to_dict() | {"runs": str(runs), "card_quick": card.quick, "failed": failed} for r in results]
         print_json(rows[0] if len(rows) == 1 else rows)
         return 0 if all(r.n_seeds for r in results) else 1
     for r in results:
-        def iv(name, fmt=".1f"):
-            v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
-            return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
-        print(f"{card.name} at {r.normal_stress / 1e3:g} kPa, {r.n_seeds} seeds: φ_peak {iv('phi_peak_deg')}°, "
-              f"φ_cs {iv('phi_cs_deg')}°, ψ_max {iv('psi_max_deg')}°, solid fraction {iv('solid_fraction', '.3f')}, "
-              f"peak at {r.peak_disp * 1e3:.2f} of {r.shear_distance * 1e3:.2f} mm")
-        if r.note:
-            print(f"  note: {r.note}")
+        _print_element(card, r)
     return 0 if all(r.n_seeds for r in results) else 1
+
+
+def _print_element(card, r) -> None:
+    def iv(name, fmt=".1f"):
+        v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
+        return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
+    if not r.n_seeds:
+        print(f"{card.name} at {r.normal_stress / 1e3:g} kPa: no seed finished (the causes are above)")
+        return
+    print(f"{card.name} at {r.normal_stress / 1e3:g} kPa, {r.n_seeds} seeds: φ_peak {iv('phi_peak_deg')}°, "
+          f"φ_cs {iv('phi_cs_deg')}°, ψ_max {iv('psi_max_deg')}°, solid fraction {iv('solid_fraction', '.3f')}, "
+          f"peak at {r.peak_disp * 1e3:.2f} of {r.shear_distance * 1e3:.2f} mm")
+    if r.note:
+        print(f"  note: {r.note}")
 
 
 def _cmd_cell(args, print_json) -> int:
     from interphase.campaign.element import run_cell
+    from interphase.campaign.folders import element_runs
     from interphase.errors import InputError
     from interphase.soil import load_card
 
     if not args.confining_stress:
         raise InputError("no confining stress given", where="--confining-stress", fix="e.g. --confining-stress 100e3")
     for s in args.confining_stress:
-        if not s > 0:
-            raise InputError(f"must be > 0 Pa, got {s!r}", where="--confining-stress", fix="e.g. --confining-stress 100e3")
+        _positive(s, "--confining-stress", "Pa", "100e3")
     card = load_card(args.card)
+    stream = sys.stderr if args.json else sys.stdout
+    runs, runs_from = element_runs(card.path, card.name, args.runs)
+    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
     results = run_cell(card, args.confining_stress, range(1, args.seeds + 1), test=args.test,
-                       relative_density=args.relative_density, output=args.runs, executor=args.executor,
-                       jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+                       relative_density=args.relative_density, output=runs, executor=args.executor,
+                       jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
     if args.json:
         rows = [r.to_dict() for r in results]
         print_json(rows[0] if len(rows) == 1 else rows)
@@ -149,9 +193,15 @@ def _cmd_density(args, print_json) -> int:
     from interphase.campaign.density import measure_density
     from interphase.soil import load_card
 
+    from interphase.campaign.density import density_runs
+
     _check_seeds(args.seeds)
-    out = measure_density(load_card(args.card), range(1, args.seeds + 1), output=args.runs, executor=args.executor,
-                          jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+    card = load_card(args.card)
+    stream = sys.stderr if args.json else sys.stdout
+    runs, runs_from = density_runs(card, args.runs)
+    print(f"density {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
+    out = measure_density(card, range(1, args.seeds + 1), output=runs, executor=args.executor, jobs=args.jobs,
+                          stream=stream, rerun_failed=args.rerun_failed)
     if args.json:
         print_json(out)
         return 0
@@ -165,21 +215,25 @@ def _cmd_density(args, print_json) -> int:
 def _cmd_calibrate(args, print_json) -> int:
     from interphase.campaign.calibrate import calibrate
 
+    nan = float("nan")
     result = calibrate(args.target, quick=args.quick, card_path=args.output, output=args.runs,
-                       executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout)
+                       executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
+                       rerun_failed=args.rerun_failed)
     if args.json:
         print_json(result)
-    else:
-        print(f"soil card written: {result['card']}")
-        for k, v in result["chosen"].items():
-            print(f"  {k} = {v:.4g} ({result['posterior'][k]['lo']:.4g}–{result['posterior'][k]['hi']:.4g})")
-        for a in result["achieved"]:
-            print(f"  {a['quantity']}: target {a['target']:.1f}°, achieved {a['value']:.1f}° "
-                  f"({a['lo']:.1f}–{a['hi']:.1f}): {a['verdict']}")
-        for v in result["verification"]:
-            for c in v["checks"]:
-                print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
-                      f"measured {c['measured']:.1f}° ({c['lo']:.1f}–{c['hi']:.1f}): {c['verdict']}")
+        return 0
+    quick = " (--quick: a first look, not a calibrated soil)" if result["calibration"].get("quick") else ""
+    print(f"soil card {'read back' if result.get('reused') else 'written'}: {result['card']}{quick}")
+    for k, v in result["chosen"].items():
+        post = result["posterior"].get(k, {})
+        print(f"  {k} = {v:.4g} ({post.get('lo', nan):.4g}–{post.get('hi', nan):.4g})")
+    for a in result["achieved"]:
+        print(f"  {a['quantity']}: target {a['target']:.1f}°, achieved {a['value']:.1f}° "
+              f"({a.get('lo', nan):.1f}–{a.get('hi', nan):.1f}): {a.get('verdict', '?')}")
+    for v in result["verification"]:
+        for c in v["checks"]:
+            print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
+                  f"measured {c['measured']:.1f}° ({c.get('lo', nan):.1f}–{c.get('hi', nan):.1f}): {c.get('verdict', '?')}")
     return 0
 
 
@@ -189,8 +243,8 @@ def _cmd_validate(args, print_json) -> int:
     from interphase.api import validate
     _check_seeds(args.seeds)
     res = validate(args.lab, soil=args.soil, fit=args.fit, simulate=args.simulate, seeds=args.seeds,
-                   output=args.output, executor=args.executor, jobs=args.jobs,
-                   stream=sys.stderr if args.json else sys.stdout)
+                   output=args.output, runs=args.runs, executor=args.executor, jobs=args.jobs,
+                   rerun_failed=args.rerun_failed, stream=sys.stderr if args.json else sys.stdout)
     df, sk, miss = res["table"], res["skill"], res["largest_miss"]
     if args.json:
         print_json(res | {"table": json.loads(df.to_json(orient="records")),
@@ -203,7 +257,7 @@ def _cmd_validate(args, print_json) -> int:
     if miss:
         print(f"largest miss: line {miss['row']} ({miss['soil']}, {miss['surface']}, {miss['normal_stress_kpa']:g} kPa): "
               f"{miss['error_deg']:+.1f}° ({miss['source']}, {miss['table_or_figure']})")
-    print("written: " + ", ".join(str(f) for f in res["files"]))
+    print(("kept (unchanged): " if res.get("kept") else "written: ") + ", ".join(str(f) for f in res["files"]))
     return 0
 
 

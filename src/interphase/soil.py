@@ -23,10 +23,12 @@ from interphase.errors import InputError
 #: Case fields a card may set: the grains and how the specimen is made, nothing of a surface or a test
 SOIL_FIELDS = ("d50", "gradation", "density", "shear_modulus", "poisson", "restitution", "friction_pp",
                "rolling_friction", "preparation")
-#: Case fields of the element test's protocol, and their defaults (docs/soils.md: the cell and speed
-#: that agree with the interface campaigns' 40 × 25 D50 soil test at 0.02 m/s within its scatter, and
-#: whose φ_peak scatters a fifth as much as the 20 × 15 cell's over 5 seeds, at twice its cost)
-ELEMENT_DEFAULTS = {"box_length_d50": 30.0, "box_height_d50": 20.0, "shear_velocity": 0.05,
+#: Case fields of the element test's protocol, and their defaults (docs/soils.md: the cell that agrees
+#: with the interface campaigns' 40 × 25 D50 soil test at 0.02 m/s within its scatter, and whose φ_peak
+#: scatters a fifth as much as the 20 × 15 cell's over 5 seeds, at twice its cost; the speed of the
+#: campaigns, quasi-static: estimated I 6.5e-4 at 100 kPa, < 1e-3 down to ~45 kPa, where 0.05 m/s gave
+#: 1.6e-3 — φ within the scatter of 0.02 in the 20 × 15 cell; `campaign element --shear-velocity`)
+ELEMENT_DEFAULTS = {"box_length_d50": 30.0, "box_height_d50": 20.0, "shear_velocity": 0.02,
                     "shear_distance": 0.006, "snapshot_every": 0.0005, "friction_pw": 0.9}
 #: the laboratory's element test on the periodic cell (`[cell]`, engines/cell.py): its test and protocol
 #: (docs/soils.md: the specimen size converged for φ_peak and ψ_max, the rate quasi-static)
@@ -63,6 +65,11 @@ class SoilCard:
         NaNs without them."""
         d = self.extra.get("density", {})
         return float(d.get("e_min", "nan")), float(d.get("e_max", "nan"))
+
+    @property
+    def quick(self) -> bool:
+        """Written by `campaign calibrate --quick`: a first look, not a calibrated soil."""
+        return bool(self.extra.get("calibration", {}).get("quick", False))
 
     def element_case(self, normal_stress: float, seed: int = 1, **changes) -> dict:
         """The element test's Case fields as a [case] table (plain data)."""
@@ -137,14 +144,28 @@ def load_card(path) -> SoilCard:
     element = element_fields(data.get("element", {}), bad)
     card = SoilCard(name=str(name), path=p.resolve(), soil=soil, element=element, description=str(description),
                     extra={k: data[k] for k in CARD_KEYS[2:] if k in data})
-    try:                               # every field checked now, as the Case would
-        from interphase.case import case_from_dict
-
-        case_from_dict(card.element_case(100e3), where=f"{p}: [soil]")
-    except InputError as exc:
-        raise InputError(str(exc).split(": ", 1)[-1], where=f"{p}: [soil]") from None
+    check_fields(card.element_case(100e3), card, bad)
     _check_cell(card, bad)
     return card
+
+
+def check_fields(case: dict, card: SoilCard, bad) -> None:
+    """Every field checked now, as the Case would; an error names the card's line and table."""
+    import re
+
+    from interphase.case import case_from_dict
+
+    try:
+        case_from_dict(case, where="case")
+    except InputError as exc:
+        m = re.match(r"case\.(\w+)[^:]*: (.*)", str(exc), re.S)
+        if m is None:
+            raise InputError(str(exc).removeprefix("case: "), where=str(card.path)) from None
+        key, msg = m.groups()
+        table = "soil" if key in card.soil else "element" if key in ELEMENT_DEFAULTS else None
+        if table is None:
+            raise InputError(msg, where=f"{card.path}: {key}") from None
+        raise bad(table, key, msg) from None
 
 
 def _check_cell(card: SoilCard, bad) -> None:

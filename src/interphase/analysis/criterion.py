@@ -243,6 +243,38 @@ class _Blend:
         return ((1 - self.w) * a[0] + self.w * b[0], (1 - self.w) * a[1] + self.w * b[1])
 
 
+def fitted_frictions(model: CriterionModel) -> list[float]:
+    """The particle–surface frictions the model's θa–θr fits were made at (empty: the study's
+    readings, or only a pooled fit)."""
+    return sorted(float(k) for k in model.theta_r if k != "all") if not model.is_default else []
+
+
+def coverage(model: CriterionModel) -> str:
+    """What a model's fits cover, in words: the frictions and the θa ranges of each branch."""
+    parts = []
+    mus = fitted_frictions(model)
+    if mus:
+        parts.append(f"frictions {mus[0]:g}–{mus[-1]:g} (fitted at {', '.join(f'{m:g}' for m in mus)})")
+    fits = [f for f in model.theta_r.values() if f is not None]
+    if fits:
+        lo, hi = max(f.x_range[0] for f in fits), min(f.x_range[1] for f in fits)
+        parts.append(f"θa {lo:.1f}–{hi:.1f}° (> 92° filter)")
+    if model.ratio is not None:
+        lo, hi = model.ratio.x_range
+        parts.append(f"θa {lo - 90:.1f}–{hi - 90:.1f}° on flat-spaced surfaces (≥ 90° filter)")
+    return ", ".join(parts) or "nothing"
+
+
+def _check_friction(model: CriterionModel, friction: float) -> None:
+    """Refuse a friction outside the fitted ones: the intercept ≈ φμ and the slope of θr(θa) move
+    with friction (Fig. 6.8), and nothing in the data says how they go on beyond the last fit."""
+    mus = fitted_frictions(model)
+    if mus and not (mus[0] - 1e-9 <= friction <= mus[-1] + 1e-9):
+        raise InputError(f"friction {friction:g} is outside what the fits of {model.source} cover: {coverage(model)}",
+                         where="--friction", fix=f"give a friction within {mus[0]:g}–{mus[-1]:g}, fit a campaign that "
+                         "covers it (--fit), or `--fit study` (the study's readings, any friction)")
+
+
 def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
     per = {float(k): f for k, f in model.theta_r.items() if k != "all"}
     for k, f in per.items():
@@ -256,53 +288,46 @@ def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
         notes.append(f"no θa–θr fit for friction {friction:g}: interpolated between the fits for {lo:g} and {hi:g} "
                      "(linear in φμ)")
         return _Blend(per[lo], per[hi], w)
-    if "all" in model.theta_r:
-        notes.append(f"no θa–θr fit for friction {friction:g}: the pooled fit (all frictions) is used")
+    if "all" in model.theta_r and not per:
+        notes.append(f"no θa–θr fit per friction: the pooled fit (all frictions) is used for {friction:g}")
         return model.theta_r["all"]
     raise InputError(f"no θa–θr correlation in {model.source}: " + model.reasons.get("fig6_8", "no data"),
                      where="--fit", fix="run more cases, or `--fit study` for the study's readings")
 
 
-def _check_range(fit, value: float, what: str, source: str) -> None:
+def _check_range(fit, value: float, what: str, model: CriterionModel) -> None:
     lo, hi = fit.x_range
     tol = 1e-9 * max(1.0, abs(hi - lo))
     if not (lo - tol <= value <= hi + tol):
-        raise InputError(f"{what} = {value:.2f}° is outside the fitted range {lo:.2f}–{hi:.2f}° of {source}",
-                         where="PROFILE", fix="the correlation would be extrapolated; fit a campaign that covers it")
+        raise InputError(f"{what} = {value:.2f}° is outside the fitted range {lo:.2f}–{hi:.2f}° of {model.source} "
+                         f"(the fits cover {coverage(model)})", where="PROFILE",
+                         fix="the correlation would be extrapolated; fit a campaign that covers it")
 
 
-def predict(model: CriterionModel, friction: float, theta_a_92: float, theta_a_90: float,
-            flat_spaced: bool = False, filt: int | None = None) -> Prediction:
-    """Run the chain. θa in ψ degrees (NaN: non-dilative). `filt` forces the branch (92: Fig. 6.8,
-    90: Fig. 6.9); None chooses it from `flat_spaced` as the study does."""
-    if not (math.isfinite(friction) and friction >= 0):
-        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="--friction")
-    notes: list = []
-    use90 = (filt == 90) if filt is not None else flat_spaced
-    if model.is_default:
-        notes.append("STUDY DEFAULTS: approximate readings of the study's published figures, not fits")
+def _theta_r(model: CriterionModel, friction: float, theta_a_92: float, theta_a_90: float, use90: bool,
+             notes: list) -> tuple:
+    """(θr, its interval, branch, θa used, filter) of the chain's first two steps."""
     if use90 and math.isfinite(theta_a_90) and theta_a_90 > 0:
         if model.ratio is None:
             raise InputError("no flat-spaced (Fig. 6.9) correlation in " + model.source + ": "
                              + model.reasons.get("fig6_9", "no data"), where="--fit",
                              fix="use --filter 92, or fit a campaign with Group 2 surfaces")
         a_ccw = theta_a_90 + 90.0
-        _check_range(model.ratio, a_ccw, "θa (≥ 90°, ccw)", model.source)
+        _check_range(model.ratio, a_ccw, "θa (≥ 90°, ccw)", model)
         ratio = float(model.ratio.predict(a_ccw))
         r_lo, r_hi = model.ratio.predict_interval(a_ccw)
-        theta_r, tr_iv = ratio * theta_a_90, (r_lo * theta_a_90, r_hi * theta_a_90)
-        branch, a_used, f_used = "flat-spaced (Fig. 6.9)", theta_a_90, 90
-    else:
-        a = theta_a_92
-        branch = "dilative (Fig. 6.8)"
-        if not math.isfinite(a):
-            a, branch = 0.0, "non-dilative"
-            notes.append("θa undefined (non-dilative): θa = 0, the θa–θr intercept ≈ φμ")
-        fit = _pick_theta_r(model, friction, notes)
-        _check_range(fit, a, "θa (> 92°)", model.source)
-        theta_r = float(fit.predict(a))
-        tr_iv = fit.predict_interval(a)
-        a_used, f_used = a, 92
+        return ratio * theta_a_90, (r_lo * theta_a_90, r_hi * theta_a_90), "flat-spaced (Fig. 6.9)", theta_a_90, 90
+    a, branch = theta_a_92, "dilative (Fig. 6.8)"
+    if not math.isfinite(a):
+        a, branch = 0.0, "non-dilative"
+        notes.append("θa undefined (non-dilative): θa = 0, the θa–θr intercept ≈ φμ")
+    fit = _pick_theta_r(model, friction, notes)
+    _check_range(fit, a, "θa (> 92°)", model)
+    return float(fit.predict(a)), tuple(fit.predict_interval(a)), branch, a, 92
+
+
+def _efficiency(model: CriterionModel, theta_r: float, tr_iv) -> tuple[float, tuple]:
+    """(E, its interval) from the E–θr fit at θr and at the ends of θr's interval."""
     if model.efficiency is None:
         raise InputError("no E–θr correlation in " + model.source + ": " + model.reasons.get("fig6_10a", "no data"),
                          where="--fit", fix="the campaign needs box tests paired with its interface cases")
@@ -310,10 +335,49 @@ def predict(model: CriterionModel, friction: float, theta_a_92: float, theta_a_9
     cands = [model.efficiency.predict_interval(t) for t in (theta_r, *tr_iv) if math.isfinite(t)]
     lo = [c[0] for c in cands if math.isfinite(c[0])]
     hi = [c[1] for c in cands if math.isfinite(c[1])]
-    e_iv = (min(lo), max(hi)) if lo and hi else (math.nan, math.nan)
+    return e, ((min(lo), max(hi)) if lo and hi else (math.nan, math.nan))
+
+
+def _bounded(tan_delta: float, iv: tuple, friction: float, tan_phi: float, flat: bool, notes: list) -> tuple:
+    """tan δ and its interval held to what the physics allows. The flat-surface value is
+    tan δ_flat = min(μ, tan φ): on a flat every contact has |ft| ≤ μ fn, so ΣFt ≤ μ ΣFn (Coulomb),
+    and the study's non-dilative systems slide at φμ where μ < tan φ (where μ ≥ tan φ the soil
+    fails first, at φ). On a flat the prediction IS that value (its interval: the fit's lower end
+    below, the bound above); on any other surface it is never below it, so that δ is monotone in μ
+    wherever the fits are and rough never predicts less than smooth."""
+    bound = min(friction, tan_phi)
+    deg = lambda t: math.degrees(math.atan(t))
+    if flat:
+        if abs(tan_delta - bound) > 1e-12:
+            notes.append(f"flat (non-dilative): δ = min(φμ, φ) = {deg(bound):.2f}° (Coulomb: ΣFt ≤ μ ΣFn; the "
+                         f"study's non-dilative systems slide at φμ); the fitted E–θr gave {deg(tan_delta):.2f}°")
+        lo = min(iv[0], bound) if math.isfinite(iv[0]) else math.nan
+        return bound, (lo, bound if math.isfinite(iv[1]) else math.nan)
+    if tan_delta < bound:
+        notes.append(f"the chain gave δ {deg(tan_delta):.2f}°, below the flat-surface value min(φμ, φ) = "
+                     f"{deg(bound):.2f}°: the flat-surface value is given (a rough surface grips no less)")
+    clip = lambda t: max(t, bound) if math.isfinite(t) else t
+    return max(tan_delta, bound), (clip(iv[0]), clip(iv[1]))
+
+
+def predict(model: CriterionModel, friction: float, theta_a_92: float, theta_a_90: float,
+            flat_spaced: bool = False, filt: int | None = None) -> Prediction:
+    """Run the chain. θa in ψ degrees (NaN: non-dilative). `filt` forces the branch (92: Fig. 6.8,
+    90: Fig. 6.9); None chooses it from `flat_spaced` as the study does. A friction or θa outside
+    what the fits cover is refused (InputError naming the covered range); tan δ is held to the
+    flat-surface value (`_bounded`)."""
+    if not (math.isfinite(friction) and friction >= 0):
+        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="--friction")
+    notes: list = []
+    use90 = (filt == 90) if filt is not None else flat_spaced
+    if model.is_default:
+        notes.append("STUDY DEFAULTS: approximate readings of the study's published figures, not fits")
+    _check_friction(model, friction)
+    theta_r, tr_iv, branch, a_used, f_used = _theta_r(model, friction, theta_a_92, theta_a_90, use90, notes)
+    e, e_iv = _efficiency(model, theta_r, tr_iv)
     tp = model.tan_phi
-    td = e * tp
-    td_iv = (e_iv[0] * tp, e_iv[1] * tp)
+    td, td_iv = _bounded(e * tp, (e_iv[0] * tp, e_iv[1] * tp), friction, tp, branch == "non-dilative", notes)
+    e, e_iv = td / tp, (td_iv[0] / tp, td_iv[1] / tp)
     deg = lambda t: math.degrees(math.atan(t)) if math.isfinite(t) else math.nan
     return Prediction(source=model.source, branch=branch, filter=f_used, theta_a_deg=a_used,
                       theta_a_ccw_deg=a_used + 90.0, theta_r_deg=theta_r, theta_r_interval=tuple(tr_iv),

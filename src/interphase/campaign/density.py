@@ -31,11 +31,19 @@ REFERENCE_STRESS = 10e3        # [Pa]
 TOKEN_STRAIN = 0.002           # [-] the axial compression these runs need only to record their start
 
 
+def density_runs(card: SoilCard, runs=None):
+    """(folder, where the rule came from): --runs, else runs/density/NAME beside the card."""
+    from interphase.campaign.folders import beside, given
+
+    return given(runs, "--runs") if runs is not None else beside(card.path, f"runs/density/{card.name}", "--runs")
+
+
 def measure_density(card: SoilCard, seeds, *, output: Path | None = None, executor=None, jobs=None,
-                    stream=None) -> dict:
+                    stream=None, rerun_failed: bool = False) -> dict:
     seeds = [int(s) for s in seeds]
-    output = Path(output) if output else card.path.parent.parent / "runs" / "density" / card.name
-    _, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs, stream=stream)
+    output = density_runs(card, output)[0]
+    _, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs, stream=stream,
+                          rerun_failed=rerun_failed)
     e = [float(v) for v in e]
     table = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(card.cell["n_grains"]),
              "preparations": list(PREPARATIONS), "void_ratios": [round(v, 5) for v in e],
@@ -47,7 +55,7 @@ def measure_density(card: SoilCard, seeds, *, output: Path | None = None, execut
 
 
 def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds, *, test: str | None = None,
-                   output: Path, executor=None, jobs=None, stream=None) -> float:
+                   output: Path, executor=None, jobs=None, stream=None, rerun_failed: bool = False) -> float:
     """The preparation whose specimen, consolidated to `stress` [Pa], has the void ratio of relative
     density Dr on the card's limits: e = e_max − Dr (e_max − e_min). The map e(preparation) at that
     stress is measured (token compressions at PREPARATIONS, `seeds`; resumable) and inverted linearly."""
@@ -61,7 +69,7 @@ def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds
         raise InputError(f"relative density {relative_density!r} is not a fraction in [0, 1]",
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
     prep, e = void_ratio_map(card, stress, seeds, test=test, output=output, executor=executor, jobs=jobs,
-                             stream=stream)
+                             stream=stream, rerun_failed=rerun_failed)
     target = e_max - relative_density * (e_max - e_min)
     ok = np.isfinite(e)
     order = np.argsort(e[ok])
@@ -74,7 +82,7 @@ def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds
 
 
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
-                   stream=None) -> tuple[list, np.ndarray]:
+                   stream=None, rerun_failed: bool = False) -> tuple[list, np.ndarray]:
     """(PREPARATIONS, seed-mean e at the start of a token compression at `stress` for each)."""
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
@@ -82,7 +90,7 @@ def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: P
     path = write_campaign(Path(output) / f"{name}.toml", name=name, case=base,
                           sweep={"preparation": list(PREPARATIONS), "seed": [int(s) for s in seeds]},
                           description=f"void ratio against preparation of the soil card {card.path}")
-    planned, series, _ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream)
+    planned, series, _ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     e = []
     for prep in PREPARATIONS:
         vals = [float(series[p.case_id]["e"].iloc[0]) for p in planned

@@ -40,15 +40,17 @@ def write_campaign(path: Path, *, name: str, case: dict, sweep: dict | None = No
     return path
 
 
-def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None):
+def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None,
+              rerun_failed: bool = False):
     """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame}, summaries
-    table of the finished ones). Failed cases are reported by the run and left out of the results."""
+    table of the finished ones). Failed cases are reported by the run and left out of the results
+    (`failures` says why); `rerun_failed` runs them again."""
     from interphase.campaign.plan import plan
     from interphase.campaign.run import run_campaign
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False)
+    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False, rerun_failed=rerun_failed)
     campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}
@@ -90,19 +92,48 @@ def _start_order(folder: Path) -> float:
     return hexatic_order(first["x"].to_numpy(float), first["z"].to_numpy(float), first["radius"].to_numpy(float))
 
 
+def failures(path: Path) -> list[str]:
+    """One line per case of a generated campaign file that did not finish: its label, status and
+    the engine's cause and message as the runner recorded them."""
+    from interphase.campaign.schema import load_campaign
+    from interphase.campaign.store import INDEX, CampaignStore
+
+    campaign = load_campaign(path)
+    if not (campaign.output / INDEX).exists():
+        return []
+    with CampaignStore(campaign.output) as store:
+        rows = store.status()
+    bad = rows[~rows["status"].isin(("done", "pending"))]
+    return [f"{r.label}: {r.status}" + (f" ({r.cause})" if isinstance(r.cause, str) and r.cause else "")
+            + (f": {r.message}" if isinstance(r.message, str) and r.message else "") for r in bad.itertuples()]
+
+
 def run_element(card: SoilCard, normal_stresses, seeds, *, output: Path | None = None, executor: str | None = None,
-                jobs: int | None = None, stream=None) -> list[ElementResult]:
-    """The element test of `card` at each normal stress [Pa] on packing seeds `seeds`."""
-    output = Path(output) if output else Path("runs") / "element" / card.name
+                jobs: int | None = None, stream=None, rerun_failed: bool = False,
+                shear_velocity: float | None = None) -> list[ElementResult]:
+    """The element test of `card` at each normal stress [Pa] on packing seeds `seeds`, in `output`
+    (default: runs/element/NAME beside the card, campaign.folders); `shear_velocity` [m/s] replaces
+    the card's [element] speed."""
+    from interphase.campaign.folders import element_runs
+
+    output = element_runs(card.path, card.name, output)[0]
     stresses = [float(s) for s in normal_stresses]
-    base = card.element_case(stresses[0])
+    base = card.element_case(stresses[0], **({} if shear_velocity is None else {"shear_velocity": shear_velocity}))
     base.pop("normal_stress"), base.pop("seed")
     path = write_campaign(output / f"element-{card.name}.toml", name=f"element-{card.name}", case=base,
                           sweep={"normal_stress": stresses, "seed": [int(s) for s in seeds]},
                           description=f"element test of the soil card {card.path}")
-    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream)
+    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     return [element_of(cases, series, summ, cases[0].case.d50, s)
             for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
+
+
+def element_failures(card: SoilCard, output=None) -> list[str]:
+    """`failures` of the element test's generated file of `card` in `output` (run_element's folder)."""
+    from interphase.campaign.folders import element_runs
+
+    path = element_runs(card.path, card.name, output)[0] / f"element-{card.name}.toml"
+    return failures(path) if path.exists() else []
 
 
 def cell_of(cases, series: dict, summ: pd.DataFrame, *, e_limits=(np.nan, np.nan)):
@@ -122,7 +153,7 @@ def cell_of(cases, series: dict, summ: pd.DataFrame, *, e_limits=(np.nan, np.nan
 
 def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = None, relative_density: float | None = None,
              output: Path | None = None, executor: str | None = None, jobs: int | None = None, stream=None,
-             **changes):
+             rerun_failed: bool = False, **changes):
     """The laboratory's element test (triaxial or biaxial, the card's [cell]) of `card` at each
     confining stress [Pa] on packing seeds `seeds`. At `relative_density` (a fraction), each stress's
     preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min)
@@ -130,14 +161,17 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
     the card's preparation. Returns CellResults."""
     from interphase.campaign.density import preparation_at
 
+    from interphase.campaign.folders import element_runs
+
     test = test or card.cell["test"]
-    output = Path(output) if output else card.path.parent.parent / "runs" / "element" / card.name
+    output = element_runs(card.path, card.name, output)[0]
     stresses = [float(s) for s in confining_stresses]
     seeds = [int(s) for s in seeds]
     prep = {s: card.soil.get("preparation", 1.0) for s in stresses}
     if relative_density is not None:
         prep = {s: preparation_at(card, relative_density, s, seeds, test=test, output=output / "density",
-                                  executor=executor, jobs=jobs, stream=stream) for s in stresses}
+                                  executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+                for s in stresses}
     base = card.cell_case(stresses[0], test=test, **changes)
     for k in ("normal_stress", "seed", "preparation"):
         base.pop(k, None)
@@ -146,19 +180,20 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
               for s in stresses]
     path = write_campaign(output / f"{name}.toml", name=name, case=base, groups=groups,
                           description=f"{test} test of the soil card {card.path}")
-    planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream)
+    planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream,
+                                           rerun_failed=rerun_failed)
     return [cell_of(cases, series, summ, e_limits=card.void_ratio_limits)
             for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
 
 
-def run_cell_cases(path: Path, *, executor=None, jobs=None, stream=None):
+def run_cell_cases(path: Path, *, executor=None, jobs=None, stream=None, rerun_failed: bool = False):
     """run_cases for cell campaigns: their series are the cell histories (io/cell.py)."""
     from interphase.campaign.plan import plan
     from interphase.campaign.run import run_campaign
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False)
+    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False, rerun_failed=rerun_failed)
     campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}

@@ -3,9 +3,9 @@ the folder they were given before they write a single file.
 
 A case folder is one that holds case.json (every folder the runner ever started) or DONE. The rule:
 
-- `render` (rendered inputs only) refuses every case folder, finished or not, and a campaign's
-  runs folder (index.sqlite): rendering would replace the deck, recipe.json, grains and STL files
-  a run was made from.
+- `render` (rendered inputs only) refuses every case folder, finished or not, a campaign's
+  runs folder (index.sqlite) and any other folder that is not empty: rendering would replace the
+  deck, recipe.json, grains and STL files a run was made from, or whatever else is there.
 - `run-case` refuses a case folder of another case (other inputs, another engine or another
   recipe): the runner clears an unfinished folder before it starts, so that case's files would
   be lost, and a finished one would be reported as this case's result. A folder of the same case
@@ -49,6 +49,12 @@ def check_render_folder(folder) -> None:
     if (folder / st.INDEX).exists():
         raise InputError(f"{str(folder)!r} is a campaign's runs folder", where=f"--output {folder}",
                          fix="render into a new folder of its own")
+    if folder.is_dir() and any(folder.iterdir()):
+        from interphase.campaign.folders import next_free
+
+        raise InputError(f"{str(folder)!r} is not empty: rendering would overwrite what is there",
+                         where=f"--output {folder}", fix=f"render into a new or empty folder, e.g. --output "
+                         f"{next_free(folder)}")
 
 
 def check_run_folder(folder, case: Case, engine: str, recipe_id: str) -> str | None:

@@ -179,6 +179,26 @@ def campaign_ensembles(campaign_path: str | Path, output: str | Path | None = No
 
     _, store, rows = open_campaign(campaign_path, output)
     try:
-        return ensemble_tables(rows, store)[0]
+        return with_inputs(ensemble_tables(rows, store)[0], rows)
     finally:
         store.close()
+
+
+#: the physical inputs `ip.ensembles` carries beside each physical case (summaries' columns, SI)
+ENSEMBLE_INPUTS = ("test", "device", "profile_kind", "profile_label", "rt", "sw", "sr", "friction_ps", "gradation",
+                   "normal_stress", "d50")
+
+
+def with_inputs(table: pd.DataFrame, rows: pd.DataFrame) -> pd.DataFrame:
+    """The ensembles table with each physical case's inputs (ENSEMBLE_INPUTS: Rt, Sw, Sr [D50], μ,
+    gradation, device, …) from its runs, after `case` (the label alone named them before)."""
+    from interphase.analysis.ensemble import physical_ids
+
+    if table.empty or rows.empty:
+        return table
+    cols = [c for c in ENSEMBLE_INPUTS if c in rows and c not in table]
+    inputs = rows.assign(physical_id=physical_ids(rows).to_numpy()).groupby("physical_id")[cols].first()
+    out = table.merge(inputs, left_on="physical_id", right_index=True, how="left")
+    at = list(out.columns).index("case") + 1
+    order = list(out.columns[:at]) + cols + [c for c in out.columns[at:] if c not in cols]
+    return out[order]

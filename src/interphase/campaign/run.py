@@ -34,7 +34,7 @@ from pathlib import Path
 
 from interphase.campaign import store as st
 from interphase.campaign.executors import LocalExecutor, SlurmExecutor, Task
-from interphase.campaign.plan import PlannedCase, plan, time_limit_minutes
+from interphase.campaign.plan import PlannedCase, estimate_seconds, plan, time_limit_minutes
 from interphase.campaign.progress import Progress
 from interphase.campaign.runner import Interrupted
 from interphase.campaign.schema import EXECUTORS, Campaign, load_campaign
@@ -226,7 +226,8 @@ def run_campaign(path, *, engines=None, executor: str | None = None, jobs: int |
         raise InputError(f"must be ≥ 0 (0 = one per core), got {jobs}", where="--jobs")
     n_engines = len(engines) if engines else len(campaign.engines)
     count = campaign.size * n_engines
-    print(f"campaign {campaign.name}: {campaign.size} case(s) in the sweeps × {n_engines} engine(s) = {count}, "
+    cap = "" if campaign.seeds is None else f" at most (sequential seeds: up to {campaign.seeds.max} per physical case)"
+    print(f"campaign {campaign.name}: {campaign.size} case(s) in the sweeps × {n_engines} engine(s) = {count}{cap}, "
           f"plus their box tests; runs folder {campaign.output} ({campaign.output_from})", file=stream, flush=True)
     for w in campaign.warnings():
         print(f"warning: {w}", file=stream, flush=True)
@@ -455,9 +456,11 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
             stale = find_stale(planned, store.status(), builds or {})
             indexed = store.statuses()
     total = f"{len(planned)} cases" if isinstance(planned, list) else "cases read one at a time"
+    if campaign.seeds is not None:
+        total = f"this round {total} (the seeds asked for now, with their box tests)"
     print(f"campaign {campaign.name} (dry run, {executor}): {total} → {campaign.output}", file=stream, flush=True)
     tallies: dict[str, int] = {}
-    n = 0
+    n, seconds = 0, 0.0
     for p in planned:
         folder = campaign.output / p.case_id
         state = st.folder_status(folder) if folder.exists() else "pending"
@@ -476,6 +479,7 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
             action = "run"
         tallies[action] = tallies.get(action, 0) + 1
         n += 1
+        seconds += estimate_seconds(p.case) if action == "run" or action.startswith("rerun") else 0.0
         if render and action == "run" and _start_status(p.case) == "done":
             if p.engine not in engines:
                 engines[p.engine] = p.engine_spec.build()
@@ -496,9 +500,20 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
         print(f"  … {n - SAMPLE} more (`--list` lists every case)", file=stream)
     report.planned = n
     print(f"{n} cases: " + ", ".join(f"{v} {k}" for k, v in sorted(tallies.items())), file=stream)
+    print(_time_estimate(seconds, _slots(campaign, executor, None)), file=stream)
     print(f"decks rendered in {root}" if render else "no decks written (`--render` writes the decks of the cases "
           f"that would run, under {root})", file=stream, flush=True)
     return report
+
+
+def _time_estimate(seconds: float, slots: int) -> str:
+    """The dry run's estimate of what would run: engine time from plan.estimate_seconds (particle-steps
+    at 1.5e6 per second on one core, docs/engines.md: a rough figure, often within a factor of 2)."""
+    if seconds <= 0:
+        return "estimated time: nothing to run"
+    hours = seconds / 3600.0
+    return (f"estimated time: {hours:.2g} core-hour(s), about {hours / max(slots, 1):.2g} h on {slots} slot(s) "
+            "(particle-steps at 1.5e6/s per core: a rough figure)")
 
 
 def campaign_status(path, *, output=None, engines=None):

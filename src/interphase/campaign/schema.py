@@ -156,8 +156,9 @@ class Campaign:
         from interphase.campaign.checks import default_notes, input_warnings
 
         cases = list(self._spec.checked) if self._spec is not None else [c.case for c in self.cases]
+        notes = list(getattr(self._spec.ctx, "notes", [])) if self._spec is not None else []
         shear = any(not c.cell for c in cases)
-        return input_warnings(cases) + (default_notes(self.stated) if shear else [])
+        return notes + input_warnings(cases) + (default_notes(self.stated) if shear else [])
 
     @property
     def pairs(self) -> list[tuple[int, int]]:
@@ -226,6 +227,7 @@ class _Ctx:
     def __init__(self, path: Path, text: str):
         self.path = path
         self.loc = Locator(text)
+        self.notes: list[str] = []          # said with the warnings (a --quick soil card)
 
     def error(self, path: tuple, message: str, fix: str | None = None) -> InputError:
         line = self.loc.line(path)
@@ -678,6 +680,8 @@ def _with_soil(ctx: _Ctx, base: dict, base_dir: Path, where: tuple, variables) -
         card = load_card(path)
     except InputError as exc:
         raise ctx.error(where, f"the soil card: {exc}", None) from None
+    if card.quick and not any(str(card.path) in n for n in ctx.notes):
+        ctx.notes.append(f"the soil card {card.path} is a --quick calibration: a first look, not a calibrated soil")
     for v in variables:
         if v.split(".")[0] in card.soil:
             raise ctx.error(where, f"{v!r} is swept here and set in the soil card {card.path}",

@@ -45,7 +45,7 @@ def profile_spec(row, d50: float, folder: Path) -> dict:
 
 
 def simulate(table, card, seeds, *, output: Path, executor: str | None = None, jobs: int | None = None,
-             stream=None, protocol: dict | None = None) -> pd.DataFrame:
+             stream=None, protocol: dict | None = None, rerun_failed: bool = False) -> pd.DataFrame:
     """DEM δ at the peak (seed ensemble, 95 % interval) per laboratory row: columns row,
     delta_dem_deg, delta_dem_lo_deg, delta_dem_hi_deg, phi_dem_deg, dem_seeds. `protocol`: the
     interface cases' Case fields (default PROTOCOL)."""
@@ -65,7 +65,7 @@ def simulate(table, card, seeds, *, output: Path, executor: str | None = None, j
     path = write_campaign(output / "simulate.toml", name="validate", case=case, groups=groups,
                           sweep={"seed": [int(s) for s in seeds]}, executor=executor or "local",
                           description=f"{table.path} on the soil card {card.path}")
-    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr)
+    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, rerun_failed=rerun_failed)
     try:
         ens = campaign_ensembles(path)
     except InputError:

@@ -2,7 +2,8 @@
 benchmark. NOT simulation results: the trends are the study's default correlations plus noise
 (criterion.default_theta_r, E plateau at θr = 30°), so fits have a known truth.
 
-Truth used: θr = φμ + (35 − φμ)·θa/40 (θa ≤ 40), 35 + 0.5·(θa − 40) beyond; E = 0.2 + 0.8·min(θr, 30)/30;
+Truth used: θr = φμ + (35 − φμ)·θa/40 (θa ≤ 40), 35 + 0.5·(θa − 40) beyond; E = 0.2 + 0.8·min(θr, 30)/30,
+never below min(μ, tan φ)/tan φ (a flat's, as the criterion holds);
 tan φ = 0.55 (box tests, one per gradation); flat-spaced (Group 2) surfaces: θa(≥ 90°) = 25–40°,
 θr/θa = 0.6 + 0.01·(θa,ccw − 115) on [0.45, 0.9].
 """
@@ -47,6 +48,9 @@ def synthetic_summaries(n: int = 200, seed: int = 0, noise_deg: float = 1.0, noi
     ratio = np.clip(0.6 + 0.01 * (ta90[fs] + 90.0 - 115.0), 0.45, 0.9)
     tr[fs] = ratio * ta90[fs] + rng.normal(0, noise_deg * 0.3, fs.sum())
     e = true_efficiency(tr) + rng.normal(0, noise_e, n)
+    # no surface grips less than a flat of its friction: tan δ ≥ min(μ, tan φ) (Coulomb on the flat; the
+    # criterion's floor), within the noise
+    e = np.maximum(e, np.minimum(mu, TAN_PHI) / TAN_PHI * (1 + rng.normal(0, noise_e, n)))
     peak = e * TAN_PHI
     kind = np.where(np.isnan(ta92), "flat", np.where(group == "group4", "random",
                                                       np.where(group == "group5", "file", "sawtooth")))
