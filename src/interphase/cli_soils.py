@@ -155,7 +155,7 @@ def _print_element(card, r) -> None:
 
 
 def _cmd_cell(args, print_json) -> int:
-    from interphase.campaign.element import run_cell
+    from interphase.campaign.cell import run_cell
     from interphase.campaign.folders import element_runs
     from interphase.errors import InputError
     from interphase.soil import load_card

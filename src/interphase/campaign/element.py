@@ -136,56 +136,6 @@ def element_failures(card: SoilCard, output=None) -> list[str]:
     return failures(path) if path.exists() else []
 
 
-def cell_of(cases, series: dict, summ: pd.DataFrame, *, e_limits=(np.nan, np.nan)):
-    """The CellResult of the planned `cases` (one soil at one confining stress, its seeds)."""
-    from interphase.analysis.cell_ensemble import cell_result
-
-    runs, voids = [], []
-    for p in cases:
-        s = series.get(p.case_id)
-        if s is None:
-            continue
-        runs.append((s["eps1"].to_numpy(float), s["epsv"].to_numpy(float), s["ratio"].to_numpy(float)))
-        voids.append(float(s["e"].iloc[0]))
-    first = cases[0].case
-    return cell_result(first.test, first.normal_stress, runs, voids, e_limits=e_limits, preparation=first.preparation)
-
-
-def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = None, relative_density: float | None = None,
-             output: Path | None = None, executor: str | None = None, jobs: int | None = None, stream=None,
-             rerun_failed: bool = False, **changes):
-    """The laboratory's element test (triaxial or biaxial, the card's [cell]) of `card` at each
-    confining stress [Pa] on packing seeds `seeds`. At `relative_density` (a fraction), each stress's
-    preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min)
-    (campaign.density.preparation_at: the laboratory's Dr0 is after consolidation too); without it,
-    the card's preparation. Returns CellResults."""
-    from interphase.campaign.density import preparation_at
-
-    from interphase.campaign.folders import element_runs
-
-    test = test or card.cell["test"]
-    output = element_runs(card.path, card.name, output)[0]
-    stresses = [float(s) for s in confining_stresses]
-    seeds = [int(s) for s in seeds]
-    prep = {s: card.soil.get("preparation", 1.0) for s in stresses}
-    if relative_density is not None:
-        prep = {s: preparation_at(card, relative_density, s, seeds, test=test, output=output / "density",
-                                  executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
-                for s in stresses}
-    base = card.cell_case(stresses[0], test=test, **changes)
-    for k in ("normal_stress", "seed", "preparation"):
-        base.pop(k, None)
-    name = f"{test}-{card.name}" + ("" if relative_density is None else f"-dr{relative_density:g}")
-    groups = [{"name": f"s{s:g}", "case": {"normal_stress": s, "preparation": prep[s]}, "sweep": {"seed": seeds}}
-              for s in stresses]
-    path = write_campaign(output / f"{name}.toml", name=name, case=base, groups=groups,
-                          description=f"{test} test of the soil card {card.path}")
-    planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream,
-                                           rerun_failed=rerun_failed)
-    return [cell_of(cases, series, summ, e_limits=card.void_ratio_limits)
-            for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
-
-
 def run_cell_cases(path: Path, *, executor=None, jobs=None, stream=None, rerun_failed: bool = False):
     """run_cases for cell campaigns: their series are the cell histories (io/cell.py)."""
     from interphase.campaign.plan import plan
