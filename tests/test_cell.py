@@ -169,3 +169,18 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     assert r["n_seeds"] == 2 and 0 < r["preparation"] < 1
     # the specimen was made for Dr 0.5 at 100 kPa: its own e says so within the two seeds' scatter
     assert math.isclose(r["relative_density"], 0.5, abs_tol=0.2)
+
+
+def test_the_campaigns_grading_is_the_sand_sieve_curve():
+    """campaigns/soils/cell_size.toml and kfs_pilot.toml carry spheres of the Karlsruhe fine sand's
+    sieve curve (lab/soils/karlsruhe-fine-sand/README.md) between 5 % and 99.75 % finer: exactly what
+    material.sieve_gradation makes of it, mass-median 0.1405 mm against the sand's d50 0.14 mm."""
+    import tomllib
+
+    from interphase.material import mass_quantile, sieve_gradation
+
+    g = sieve_gradation([0.0795e-3, 0.1002e-3, 0.1249e-3, 0.1581e-3, 0.2441e-3], [4.83, 11.96, 28.24, 84.99, 99.75])
+    for name in ("cell_size.toml", "kfs_pilot.toml"):
+        case = tomllib.loads((ROOT / "campaigns" / "soils" / name).read_text())["case"]
+        assert tuple(case["gradation"]["sizes"]) == g.sizes and tuple(case["gradation"]["fractions"]) == g.fractions
+    assert mass_quantile(g, 0.5) == pytest.approx(0.14e-3, rel=0.005)

@@ -70,3 +70,36 @@ def rayleigh_time(radius: float, density: float, shear_modulus: float, poisson: 
 def youngs_modulus(shear_modulus: float, poisson: float) -> float:
     """E = 2G(1 + ν) [Pa]."""
     return 2.0 * shear_modulus * (1.0 + poisson)
+
+
+def sieve_gradation(sieves, percent_finer, *, per_bin: int = 3) -> Gradation:
+    """A user Gradation of spheres from a laboratory sieve curve: sieve sizes [m] (ascending) with the
+    percentage by mass finer than each. The mass between two sieves is spread evenly in log d (the
+    curve drawn straight on its usual semi-log axes) over `per_bin` sub-bins, each represented by its
+    geometric-mean diameter; number fractions ∝ mass / d³. What lies below the first sieve or above
+    the last is left out (the caller chooses the sieves: the tails set the time step and the count
+    of the smallest grains). Sizes and fractions rounded to 4 digits, the last fraction closing the sum."""
+    s, m = np.asarray(sieves, float), np.asarray(percent_finer, float)
+    if s.size < 2 or np.any(np.diff(s) <= 0) or np.any(np.diff(m) < 0):
+        raise InputError("sieve sizes must ascend and their percentages finer must not fall",
+                         where="sieve_gradation", fix="give the sieve curve in ascending size")
+    sizes, mass = [], []
+    for a, b, dm in zip(s[:-1], s[1:], np.diff(m)):
+        edges = np.geomspace(a, b, per_bin + 1)
+        sizes += list(np.sqrt(edges[:-1] * edges[1:]))
+        mass += [dm / per_bin] * per_bin
+    d = np.array([float(f"{x:.4g}") for x in sizes])
+    number = np.asarray(mass) / np.asarray(sizes) ** 3
+    frac = np.round(number / number.sum(), 4)
+    frac[-1] = round(1.0 - frac[:-1].sum(), 4)
+    return Gradation(name="user", sizes=tuple(float(x) for x in d), fractions=tuple(float(f) for f in frac))
+
+
+def mass_quantile(g: Gradation, q: float) -> float:
+    """The diameter [m] below which a fraction q of the grains' mass lies (d50 at q = 0.5), read
+    from the discrete sizes (the smallest size whose cumulative mass reaches q)."""
+    d = np.asarray(g.sizes, float)
+    w = np.asarray(g.fractions, float) * d ** 3
+    o = np.argsort(d)
+    cum = np.cumsum(w[o]) / w.sum()
+    return float(d[o][np.searchsorted(cum, q - 1e-12)])
