@@ -172,7 +172,7 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
 
 
 def test_the_campaigns_grading_is_the_sand_sieve_curve():
-    """campaigns/soils/cell_size.toml and kfs_pilot.toml carry spheres of the Karlsruhe fine sand's
+    """campaigns/soils/cell_size.toml and the calibration target carry spheres of the Karlsruhe fine sand's
     sieve curve (lab/soils/karlsruhe-fine-sand/README.md) between 5 % and 99.75 % finer: exactly what
     material.sieve_gradation makes of it, mass-median 0.1405 mm against the sand's d50 0.14 mm."""
     import tomllib
@@ -180,7 +180,40 @@ def test_the_campaigns_grading_is_the_sand_sieve_curve():
     from interphase.material import mass_quantile, sieve_gradation
 
     g = sieve_gradation([0.0795e-3, 0.1002e-3, 0.1249e-3, 0.1581e-3, 0.2441e-3], [4.83, 11.96, 28.24, 84.99, 99.75])
-    for name in ("cell_size.toml", "kfs_pilot.toml"):
+    for name in ("cell_size.toml",):
         case = tomllib.loads((ROOT / "campaigns" / "soils" / name).read_text())["case"]
         assert tuple(case["gradation"]["sizes"]) == g.sizes and tuple(case["gradation"]["fractions"]) == g.fractions
     assert mass_quantile(g, 0.5) == pytest.approx(0.14e-3, rel=0.005)
+
+
+@pytest.mark.liggghts
+def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_checks(tmp_path):
+    """`campaign calibrate` on a target that names a laboratory record (campaign/calibrate_cell.py):
+    the quickest budget on 100 grains to 2 % of axial strain — a run of the machinery, not a soil."""
+    need_binary("liggghts")
+    text = (ROOT / "soils" / "targets" / "karlsruhe-fine-sand.toml").read_text()
+    text = text.replace("../../lab/", f"{ROOT}/lab/").split("[[verification]]")[0]
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
+    text = text.replace("n_grains = 500", "n_grains = 100").replace("axial_strain = 0.2", "axial_strain = 0.02")
+    text += "\n[budget.quick]\nsamples = 2\n"
+    target = tmp_path / "targets" / "tiny.toml"
+    target.parent.mkdir()
+    target.write_text(text)
+    cmd = [sys.executable, "-m", "interphase.cli", "calibrate", str(target), "--quick", "--json"]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)
+    assert res.returncode == 0, res.stderr[-3000:]
+    out = json.loads(res.stdout)
+    from interphase.soil import load_card
+
+    card = load_card(out["card"])
+    assert card.quick is False or "quick" in card.name          # named NAME-quick
+    e_min, e_max = card.void_ratio_limits
+    assert e_min < e_max
+    for k, (lo, hi) in {"friction_pp": (0.2, 1.0), "rolling_friction": (0.05, 0.8), "preparation": (0, 1)}.items():
+        assert lo <= card.soil[k] <= hi
+    assert {c["quantity"] for c in out["achieved"]} == {"phi_peak_deg", "psi_max_deg", "phi_cs_deg", "relative_density"}
+    lab = {c["quantity"]: c["laboratory"] for c in out["achieved"]}
+    assert lab["phi_peak_deg"] == pytest.approx(40.39, abs=0.01)      # TMD17, read from the record itself
+    before = Path(out["card"]).read_bytes()
+    again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 2 and Path(out["card"]).read_bytes() == before

@@ -173,9 +173,10 @@ def calibrate(target: PathLike, *, quick: bool = False, output: PathLike | None 
     target; NAME-quick with `quick`); `runs`: every run's folder. A card already there is read back
     when it is this calibration's, else refused (InputError): no card is ever replaced. Resumable."""
     from interphase.campaign.calibrate import calibrate as _calibrate
+    from interphase.campaign.calibrate_cell import calibrate_cell, is_cell_target
 
-    return _calibrate(target, quick=quick, card_path=output, output=runs, executor=executor, jobs=jobs,
-                      rerun_failed=rerun_failed)
+    fn = calibrate_cell if is_cell_target(target) else _calibrate
+    return fn(target, quick=quick, card_path=output, output=runs, executor=executor, jobs=jobs, rerun_failed=rerun_failed)
 
 
 #: shipped soil cards by a laboratory soil's name (soils/ beside the lab file's folder, or of the source tree)

@@ -214,6 +214,17 @@ def _cmd_density(args, print_json) -> int:
 
 def _cmd_calibrate(args, print_json) -> int:
     from interphase.campaign.calibrate import calibrate
+    from interphase.campaign.calibrate_cell import calibrate_cell, is_cell_target
+
+    if is_cell_target(args.target):
+        result = calibrate_cell(args.target, quick=args.quick, card_path=args.output, output=args.runs,
+                                executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
+                                rerun_failed=args.rerun_failed)
+        if args.json:
+            print_json(result)
+        else:
+            _print_cell_calibration(result)
+        return 0
 
     nan = float("nan")
     result = calibrate(args.target, quick=args.quick, card_path=args.output, output=args.runs,
@@ -235,6 +246,18 @@ def _cmd_calibrate(args, print_json) -> int:
             print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
                   f"measured {c['measured']:.1f}° ({c.get('lo', nan):.1f}–{c.get('hi', nan):.1f}): {c.get('verdict', '?')}")
     return 0
+
+
+def _print_cell_calibration(result: dict) -> None:
+    print(f"soil card written: {result['card']} (e_min {result['density']['e_min']:.3f}, e_max "
+          f"{result['density']['e_max']:.3f})")
+    for k, v in result["chosen"].items():
+        print(f"  {k} = {v:.4g} ({result['posterior'][k]['lo']:.4g}–{result['posterior'][k]['hi']:.4g})")
+    for v in [{"record": "fitted", "checks": result["achieved"]}, *result["verification"]]:
+        for c in v["checks"]:
+            iv = f" ({c['lo']:.1f}–{c['hi']:.1f})" if c.get("lo") is not None and c["lo"] == c["lo"] else ""
+            print(f"  {v['record']}, {c['quantity']}: laboratory {c['laboratory']:.2f}, model {c['measured']:.2f}{iv}"
+                  + (f": {c['verdict']}" if "verdict" in c else ""))
 
 
 def _cmd_validate(args, print_json) -> int:

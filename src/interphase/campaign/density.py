@@ -29,6 +29,7 @@ from interphase.soil import SoilCard
 PREPARATIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
 REFERENCE_STRESS = 10e3        # [Pa]
 TOKEN_STRAIN = 0.002           # [-] the axial compression these runs need only to record their start
+MAP_SEEDS = 2                  # seeds of a void-ratio map at a test's stress (the first of the test's own)
 
 
 def density_runs(card: SoilCard, runs=None):
@@ -58,7 +59,8 @@ def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds
                    output: Path, executor=None, jobs=None, stream=None, rerun_failed: bool = False) -> float:
     """The preparation whose specimen, consolidated to `stress` [Pa], has the void ratio of relative
     density Dr on the card's limits: e = e_max − Dr (e_max − e_min). The map e(preparation) at that
-    stress is measured (token compressions at PREPARATIONS, `seeds`; resumable) and inverted linearly."""
+    stress is measured (token compressions at PREPARATIONS on the first MAP_SEEDS of `seeds`;
+    resumable) and inverted linearly."""
     from interphase.errors import InputError
 
     e_min, e_max = card.void_ratio_limits
@@ -68,8 +70,8 @@ def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds
     if not 0 <= relative_density <= 1:
         raise InputError(f"relative density {relative_density!r} is not a fraction in [0, 1]",
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
-    prep, e = void_ratio_map(card, stress, seeds, test=test, output=output, executor=executor, jobs=jobs,
-                             stream=stream, rerun_failed=rerun_failed)
+    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], test=test, output=output, executor=executor,
+                             jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     target = e_max - relative_density * (e_max - e_min)
     ok = np.isfinite(e)
     order = np.argsort(e[ok])
