@@ -194,7 +194,7 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     text = (ROOT / "soils" / "targets" / "karlsruhe-fine-sand.toml").read_text()
     text = text.replace("../../lab/", f"{ROOT}/lab/").split("[[verification]]")[0]
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
-    text = text.replace("n_grains = 500", "n_grains = 100").replace("axial_strain = 0.2", "axial_strain = 0.02")
+    text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.2", "axial_strain = 0.02")
     text += "\n[budget.quick]\nsamples = 2\n"
     target = tmp_path / "targets" / "tiny.toml"
     target.parent.mkdir()
