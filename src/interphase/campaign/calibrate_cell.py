@@ -255,7 +255,6 @@ def _final(card: SoilCard, target: CellTarget, seeds, runs: Path, executor, jobs
 
 def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
                    stream=None, rerun_failed: bool = False) -> dict:
-    from interphase.campaign.calibrate import _posterior
     from interphase.campaign.density import REFERENCE_STRESS, void_ratio_map
     from interphase.campaign.folders import calibrate_folders, next_free
 
