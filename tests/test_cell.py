@@ -217,3 +217,20 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     before = Path(out["card"]).read_bytes()
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert again.returncode == 2 and Path(out["card"]).read_bytes() == before
+
+
+def test_the_model_against_laboratory_figures_draw(tmp_path):
+    """report/cell_figures.py on a committed record and the committed cell-size runs (no engine)."""
+    import pandas as pd
+
+    from interphase.report.cell_figures import angles_figure, curves_figure
+
+    t = read_triaxial(KFS / "TMD17.dat").table
+    c = pd.read_parquet(ROOT / "docs" / "soils" / "cell_size" / "cell_curves.parquet")
+    runs = [(g["eps1"].to_numpy(), g["epsv"].to_numpy(), g["ratio"].to_numpy()) for _, g in c.groupby("case_id")][:3]
+    files = curves_figure([("TMD17", t, runs), ("TMD17, no model", t, [])], tmp_path / "curves")
+    rows = [{"confining_stress": 100e3, "relative_density": 0.78, "lab_phi": 40.4, "lab_psi": 15.5,
+             "phi_peak_deg": 39.0, "phi_peak_deg_lo": 38.0, "phi_peak_deg_hi": 40.0, "psi_max_deg": 17.0,
+             "psi_max_deg_lo": 15.0, "psi_max_deg_hi": 19.0}]
+    files += angles_figure(rows, tmp_path / "angles")
+    assert all(f.stat().st_size > 1000 for f in files)
