@@ -13,7 +13,8 @@ tool's `seed_interval` of those values, log scale; S_i(s) is seed i's curve smoo
   per-seed max     max_s S_i(s)
   cross-fit        the seeds split in two halves; each half's values read at the other half's
                    seed-mean maximum (both ways; for odd n the halves differ by one)
-  leave-one-out    S_i at the maximum of the other seeds' mean curve (cross-fitting with n folds)
+  leave-one-out    S_i at the maximum of the other seeds' mean curve (cross-fitting with n folds;
+                   analysis.ensemble.peak_values, the tool's peak since issue 41)
   parabola         a parabola fitted by least squares to each seed over ± 1 D50 about the seed-mean
                    curve's maximum, read at the mean parabola's vertex (a smoothed, parametric peak)
   equal counts     (E only) the mean-curve max of the interface seeds over the mean, over random
@@ -46,7 +47,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).parent))
 from sequential_coverage import _Curves  # noqa: E402
 
-from interphase.analysis.ensemble import _grid, _on_grid, ratio_interval, values_interval  # noqa: E402
+from interphase.analysis.ensemble import _grid, _on_grid, peak_values, ratio_interval, values_interval  # noqa: E402
 from interphase.analysis.strength import PEAK_WINDOW_D50, moving_average  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -73,9 +74,7 @@ def cross_fit(S, grid):
 
 
 def leave_one_out(S, grid):
-    n = len(S)
-    others = (S.sum(0)[None, :] - S) / (n - 1)
-    return S[np.arange(n), np.argmax(others, axis=1)]
+    return peak_values(S)[0]          # the tool's peak since issue 41 (analysis.ensemble)
 
 
 def parabola(S, grid):
