@@ -397,14 +397,16 @@ def coefficient_table(fit_results) -> Table:
             civ = list(f.coef_interval) + [(np.nan, np.nan)] * (3 - len(f.coef_interval))
             row |= {"b0": coef[0], "b0 95%": iv(*civ[0]), "b1": coef[1], "b1 95%": iv(*civ[1]),
                     "b2": coef[2], "b2 95%": iv(*civ[2]) if f.model == "hinge" else "",
-                    "c": f.c, "c 95% (profile)": iv(*f.c_interval_profile),
+                    "c": f.c, "c 95% (profile)": _profile_text(f, iv),
+                    "c admissible": iv(*f.c_range), "c located": f.located,
                     "c 95% (bootstrap)": iv(*f.c_interval_bootstrap), "bootstrap": f.bootstrap,
                     "c 95% (residual)": iv(*f.extra["c_interval_residual"]) if "c_interval_residual" in f.extra
                     else "", "R² [-]": f.r2, "note": ""}
         rows.append(row)
     df = pd.DataFrame(rows)
     order = ["figure", "y", "x", "model", "slice", "n", "b0", "b0 95%", "b1", "b1 95%", "b2", "b2 95%", "c",
-             "c 95% (profile)", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)", "R² [-]", "note"]
+             "c 95% (profile)", "c admissible", "c located", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)",
+             "R² [-]", "note"]
     df = df.reindex(columns=[c for c in order if c in df.columns])
     shown = _coefficients_shown(df)
     return Table("correlations", "Bilinear correlations: hinge y = b0 + b1·x + b2·(x − c)₊, plateau y = b0 + b1·min(x, c)",
@@ -413,7 +415,17 @@ def coefficient_table(fit_results) -> Table:
                       "seed: every physical case's seeds (and its box tests') drawn with replacement, means refitted; "
                       "residual: fitted + resampled residuals (where fewer than half the cases have two seeds) — c "
                       "also by profile likelihood (F test) and, beside a seed bootstrap, by the residual bootstrap "
-                      "on the same means (docs/methods.md §7)."], csv=df)
+                      "on the same means (docs/methods.md §7). c is searched over every break with at least "
+                      "three points on each line (a point at c counts on both): 'c admissible'; a profile "
+                      "interval that is that whole range reads 'not located' (the data fit any corner the "
+                      "design allows), one that reaches an end of it is open there."], csv=df)
+
+
+def _profile_text(f, iv) -> str:
+    """The profile interval of c as a table cell: "not located" when it is the admissible range."""
+    if not f.located:
+        return "not located " + iv(*f.c_range)
+    return iv(*f.c_interval_profile)
 
 
 def _coefficients_shown(df: pd.DataFrame) -> pd.DataFrame:
