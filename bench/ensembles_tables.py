@@ -6,7 +6,8 @@ folder, no engine): what `campaign report` writes as tables/ensembles.csv (analy
 Tables: docs/reproduction/ensembles.csv (the study, 3 seeds), precision/ensembles.csv (Group 1 to
 E ± 0.1), precision/study/ensembles.csv (the sequential study so far), group1_sandlike/ensembles.csv.
 The check campaigns' tables (stronger_soil, comb_stiffness, narrow_valleys) and docs/convergence/
-have no committed curves: they keep the estimator they were written with (their files say which).
+have no committed curves: they keep the estimator they were written with, the seed-mean curve's
+maximum (docs/reproduction.md and docs/convergence.md say so where they are quoted).
 --check: print the largest change of tan δ, tan φ and E per table instead of writing.
 """
 
