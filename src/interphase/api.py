@@ -211,7 +211,7 @@ def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = N
     cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
             "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
             "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
-            "delta_soil_deg": "δ = φ [°]"}
+            "delta_soil_deg": "δ = φ [°]", "delta_fitted_rule_deg": "δ fitted rule [°]"}
     if "delta_dem_deg" in df:
         cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
     (out / "validation.md").write_text(markdown(df, cols) + "\n" + markdown(sk, {

@@ -92,6 +92,7 @@ class CriterionModel:
     efficiency: object | None = None              # E vs θr
     reasons: dict = field(default_factory=dict)   # why a correlation is missing
     is_default: bool = False
+    rule: tuple | None = None    # (a [°], b) of δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases (fit_rule)
 
     @classmethod
     def study_defaults(cls, friction: float, tan_phi: float | None = None) -> "CriterionModel":
@@ -114,7 +115,8 @@ class CriterionModel:
         return {"schema": CRITERION_SCHEMA, "source": self.source, "about": about or {},
                 "tan_phi": self.tan_phi if math.isfinite(self.tan_phi) else None,
                 "theta_r": {str(k): fit(f) for k, f in self.theta_r.items()},
-                "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons)}
+                "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons),
+                "rule": _finite({"a_deg": self.rule[0], "b": self.rule[1]}) if self.rule else None}
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "criterion.json") -> "CriterionModel":
@@ -133,7 +135,8 @@ class CriterionModel:
 
         return cls(source=d["source"], tan_phi=math.nan if d.get("tan_phi") is None else float(d["tan_phi"]),
                    theta_r={("all" if k == "all" else float(k)): fit(v) for k, v in d["theta_r"].items()},
-                   ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}))
+                   ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}),
+                   rule=_rule_of(d.get("rule")))
 
     @classmethod
     def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
@@ -349,6 +352,13 @@ def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
     flat_spaced, why = regular_flat_spacing(profile.x, profile.z, d50)
     p = predict(model, friction, t[92].theta_a_deg, t[90].theta_a_deg, flat_spaced, filt)
     return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat_spaced, why)
+
+
+def _rule_of(d) -> tuple | None:
+    """(a, b) of a criterion file's "rule" entry, None when absent or not finite (older files)."""
+    if not d or d.get("a_deg") is None or d.get("b") is None:
+        return None
+    return float(d["a_deg"]), float(d["b"])
 
 
 def rule_delta(friction, theta_a_deg, tan_phi, a_deg: float = 0.0, b: float = 1.0) -> np.ndarray:

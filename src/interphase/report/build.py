@@ -155,8 +155,10 @@ def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionMod
         out[key] = f.fit if f is not None else None
         if f is not None and f.fit is None:
             reasons[key] = f.reason
+    a, b = fit_rule(points)
     return CriterionModel(source=source, tan_phi=fitted_soil_tan_phi(points), theta_r=theta_r,
-                          ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons)
+                          ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons,
+                          rule=(a, b) if math.isfinite(a) else None)
 
 
 def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
@@ -249,6 +251,7 @@ LAB_COLUMNS = {"row": "line", "soil": "soil", "surface": "surface", "normal_stre
                "delta_measured_deg": "δ measured [°]", "delta_predicted_deg": "δ predicted [°]",
                "delta_lo_deg": "δ lo [°]", "delta_hi_deg": "δ hi [°]", "error_predicted_deg": "error [°]",
                "error_soil_deg": "error, δ = φ [°]", "error_rule_deg": "error, δ = min(φμ + θa, φ) [°]",
+               "error_fitted_rule_deg": "error, δ = min(φμ + θa − a, atan(b tan φ)) [°]",
                "source": "source", "table_or_figure": "table or figure", "note": "note"}
 
 
