@@ -19,6 +19,9 @@ tool's `seed_interval` of those values, log scale; S_i(s) is seed i's curve smoo
                    curve's maximum, read at the mean parabola's vertex (a smoothed, parametric peak)
   equal counts     (E only) the mean-curve max of the interface seeds over the mean, over random
                    subsets of the soil's seeds of the SAME size, of their mean-curve max
+  loo-weighted k   (--weighted) leave-one-out read over a weighted spread of near-maximal locations
+                   of the other seeds' mean curve M: weights exp((M(s) − max M)/τ), τ = k × M's
+                   standard error (the others' pooled sd over √(n−1)); k = 0.5, 1, 2
 
 The reference. The quantity is the maximum μ* of the expected (infinitely many seeds) smoothed curve.
 On data it is unknown but bracketed: E[mean-curve max] ≥ μ* (a maximum of a noisy curve is above the
@@ -88,7 +91,32 @@ def parabola(S, grid):
     return coef[0] * v * v + coef[1] * v + coef[2]
 
 
+def loo_weighted(S, grid, k: float = 1.0):
+    """Leave-one-out with each seed read as a weighted mean of its curve over the locations where
+    the other seeds' mean curve is near its maximum (weights from the others only, so it cannot
+    read high either)."""
+    n = len(S)
+    if n < 3:
+        return leave_one_out(S, grid)
+    out = np.empty(n)
+    for i in range(n):
+        others = np.delete(S, i, 0)
+        m = others.mean(0)
+        tau = k * others.std(0, ddof=1).mean() / math.sqrt(n - 1)
+        w = np.exp((m - m.max()) / tau)
+        out[i] = (w * S[i]).sum() / w.sum()
+    return out
+
+
 CANDIDATES = dict(zip(NAMES, (mean_curve_max, per_seed_max, cross_fit, leave_one_out, parabola)))
+
+
+def add_weighted() -> None:
+    """The --weighted candidates (the module doc)."""
+    global NAMES
+    for k in (0.5, 1.0, 2.0):
+        CANDIDATES[f"loo-weighted k={k:g}"] = (lambda kk: lambda S, g: loo_weighted(S, g, kk))(k)
+    NAMES = tuple(CANDIDATES)
 
 
 # ---- populations ----------------------------------------------------------------------------------
@@ -259,7 +287,10 @@ def main(argv=None) -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--trials", type=int, default=600)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--weighted", action="store_true", help="add the loo-weighted candidates")
     args = ap.parse_args(argv)
+    if args.weighted:
+        add_weighted()
     rng = np.random.default_rng(args.seed)
     t0 = time.time()
     pops = populations()
