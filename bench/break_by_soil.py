@@ -37,7 +37,8 @@ from interphase.analysis.correlations import fit_plateau  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_tables  # noqa: E402
 
 REPRO = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
-SOILS = {"the study's (rolling 0.1)": (REPRO, "group1"), "sand-like (dense, rolling 0.6)": (REPRO / "group1_sandlike", None)}
+SOILS = {"the study's (rolling 0.1)": (REPRO, "group1"),
+         "sand-like (dense, rolling 0.6)": (REPRO / "group1_sandlike", None)}
 
 
 def soil_row(name: str, folder: Path, group: str | None, own_maxima: bool = False) -> str:
