@@ -177,8 +177,10 @@ def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
             rid = prov.get("recipe_id") or meta.get("recipe_id") or meta.get("template_hash")   # older folders
             if rid:
                 thash.add(str(rid))
-    elif summaries is not None and "engine" in summaries:
-        engines |= set(summaries["engine"].dropna().astype(str))
+    if not engines and summaries is not None:       # no case folders (committed tables): the summaries' columns
+        col = next((c for c in ("engine_version", "engine") if c in summaries), None)
+        engines |= set(summaries[col].dropna().astype(str)) if col else set()
+        thash |= set(summaries["recipe_id"].dropna().astype(str)) if "recipe_id" in summaries and not thash else set()
     today = _dt.datetime.now(_dt.timezone.utc).date().isoformat()
     return (f"interphase-dem {__version__}; engine {', '.join(sorted(engines)) or 'unknown'}; "
             f"recipe {', '.join(sorted(thash)) or 'unknown'}; report template {template_hash()}; {today}")
@@ -373,8 +375,9 @@ def _tables(m: ReportModel) -> list:
         tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle",
                               m.lab[list(LAB_COLUMNS)].rename(columns=LAB_COLUMNS),
                               ["δ = atan(E·tan φ); tan φ: the laboratory's own soil test where the file gives it, "
-                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ and "
-                               "δ = min(φμ + θa, φ) (docs/validation.md)."]))
+                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ, "
+                               "δ = min(φμ + θa, φ), and δ = min(φμ + θa − a, atan(b tan φ)) with a, b fitted on "
+                               "the campaign's cases (docs/validation.md)."]))
     return tables
 
 
