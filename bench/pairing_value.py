@@ -7,7 +7,9 @@ and for (a) the 95 % half-width of E both ways over the 126 physical cases:
   paired:   E_run = tan δ_s / tan φ_s per seed s (3 seeds), Student t on the mean of E_run;
   unpaired: the seed-ensemble E (the report's: interface seeds against all 10 soil seeds, delta
             method; docs/methods.md), computed here from the same peak values.
-Only positive correlations make a paired interval narrower. Usage:
+Every peak here, both sides, is each run's own maximum (summaries.csv `peak_stress_ratio`), not the
+seed ensemble's leave-one-out peak the report reads: a comparison of the two pairings on one
+reading, not the report's E or φ. Only positive correlations make a paired interval narrower. Usage:
     python bench/pairing_value.py [docs/reproduction/summaries.csv]
 """
 

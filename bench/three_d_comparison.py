@@ -7,11 +7,13 @@ curves.parquet) and prints three Markdown tables for docs/3d.md:
   1. per Rt/D50: tan δ (peak) and E with their 95 % seed intervals in the quasi-2D and the 3D cell,
      the study's 2D cell (40 × 25 D50, docs/reproduction/ensembles.csv) beside them, and 3D − 2D with
      its interval and verdict (analysis.difference: Welch on the seeds' peak states, tolerance 0.03;
-     E through the delta method on the log of each side's ratio of means, tolerance 0.05);
+     E through the delta method on the log of each side's ratio of means, tolerance 0.05; E's
+     difference also at 90 %);
   2. the 3D out-of-plane share: R_yy and Σ|fy|/Σ|f| at the surface, θr in both devices;
   3. the areal surface z = p(x) + q(y) sheared along each set of teeth, against two predictions of
      the profile criterion for the trace along the shear: (a) the measured 3D extruded profile of
-     the same teeth (same soil, cell, stress), judged as in table 1; (b) the chain θa → θr → E of the
+     the same teeth (same soil, cell, stress), the difference over that one soil counted once
+     (shared_soil_e_difference); (b) the chain θa → θr → E of the
      reproduction's fits (shipped with the package; fitted on the quasi-2D soil) at the 3D soil's
      tan φ, θa read on the areal surface's own traces in that direction (surface.areal).
 Seed states and E are the report's (analysis.ensemble_table, docs/methods.md).
@@ -74,18 +76,36 @@ def _log_terms(a: np.ndarray, b: np.ndarray) -> list[tuple[float, int]]:
     return [(v.var(ddof=1) / (v.size * v.mean() ** 2), v.size) for v in (a, b)]
 
 
-def e_difference(a1, b1, a2, b2) -> tuple[float, float, float, str]:
-    """E2 − E1 with its 95 % interval and verdict (E = mean a / mean b per device, the four seed
-    groups independent): each E's delta-method variance on the log, scaled by E², added; Student t
-    with Welch–Satterthwaite degrees of freedom, as the report's E interval (docs/methods.md)."""
+def e_difference(a1, b1, a2, b2, level: float = 0.95) -> tuple[float, float, float, str]:
+    """E2 − E1 with its `level` interval and verdict (E = mean a / mean b per device, the four seed
+    groups independent: two devices, two soils): each E's delta-method variance on the log, scaled
+    by E², added; Student t with Welch–Satterthwaite degrees of freedom, as the report's E interval
+    (docs/methods.md). The verdict is the 95 % interval's."""
     if min(v.size for v in (a1, b1, a2, b2)) < 2:
         return math.nan, math.nan, math.nan, "undecided"
     e1, e2 = a1.mean() / b1.mean(), a2.mean() / b2.mean()
     terms = [(e1 ** 2 * v, n) for v, n in _log_terms(a1, b1)] + [(e2 ** 2 * v, n) for v, n in _log_terms(a2, b2)]
     var = sum(v for v, _ in terms)
     df = var ** 2 / sum(v ** 2 / (n - 1) for v, n in terms if v > 0) if var > 0 else 1.0
-    h = stats.t.ppf(0.975, df) * math.sqrt(var)
     d = e2 - e1
+    h95, h = (stats.t.ppf(0.5 + q / 2, df) * math.sqrt(var) for q in (0.95, level))
+    return d, d - h, d + h, verdict(d - h95, d + h95, TOL_E)
+
+
+def shared_soil_e_difference(a1, a2, b) -> tuple[float, float, float, str]:
+    """E2 − E1 of two interface ensembles over ONE soil ensemble b: (mean a2 − mean a1)/mean b.
+    The soil enters once, as a scale: var ≈ var_Welch(a2 − a1)/b̄² + d²·s_b²/(n_b·b̄²); Student t
+    with the Welch degrees of freedom of the interface terms (counting b in each E and adding the
+    two E's variances, as e_difference does for two soils, counts its scatter twice and ignores
+    that it moves both E together)."""
+    if min(v.size for v in (a1, a2, b)) < 2:
+        return math.nan, math.nan, math.nan, "undecided"
+    bm = b.mean()
+    d = (a2.mean() - a1.mean()) / bm
+    v1, v2 = a1.var(ddof=1) / a1.size, a2.var(ddof=1) / a2.size
+    var = (v1 + v2) / bm ** 2 + d ** 2 * b.var(ddof=1) / (b.size * bm ** 2)
+    df = (v1 + v2) ** 2 / (v1 ** 2 / (a1.size - 1) + v2 ** 2 / (a2.size - 1)) if v1 + v2 > 0 else 1.0
+    h = stats.t.ppf(0.975, df) * math.sqrt(var)
     return d, d - h, d + h, verdict(d - h, d + h, TOL_E)
 
 
@@ -114,7 +134,7 @@ def main(campaign: Path, save: Path | None) -> None:
         names = iface.loc[m, "_case"].unique()
         return names[0] if len(names) else None
 
-    print("\n| Rt/D50 | tan δ 2D (20 × 15) | tan δ 3D (20 × 10 × 15) | 3D − 2D | verdict (± 0.03) | E 2D | E 3D | 3D − 2D | verdict (± 0.05) | E, study's 2D cell (40 × 25) |")
+    print("\n| Rt/D50 | tan δ 2D (20 × 15) | tan δ 3D (20 × 10 × 15) | 3D − 2D | verdict (± 0.03) | E 2D | E 3D | 3D − 2D (95 %; 90 %) | verdict (± 0.05) | E, study's 2D cell (40 × 25) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for rt in (0.2, 1.0, 3.0):
         c2, c3 = case_of("periodic", rt), case_of("periodic3d", rt)
@@ -124,11 +144,12 @@ def main(campaign: Path, save: Path | None) -> None:
         t2, t3 = table.loc[c2], table.loc[c3]
         d = difference(peaks(c2), peaks(c3), TOL_TAN)
         de, lo, hi, v = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"])
+        _, lo90, hi90, _ = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"], 0.90)
         s = study.loc[c2] if c2 in study.index else None
         big = _fmt(s["E"], s["E_lo"], s["E_hi"], 2) if s is not None else "—"
         print(f"| {rt:g} | {_fmt(t2.tan_delta, t2.tan_delta_lo, t2.tan_delta_hi)} | {_fmt(t3.tan_delta, t3.tan_delta_lo, t3.tan_delta_hi)} "
               f"| {d.change:+.3f} ({d.change_lo:+.3f}, {d.change_hi:+.3f}) | {d.verdict} "
-              f"| {_fmt(t2.E, t2.E_lo, t2.E_hi, 2)} | {_fmt(t3.E, t3.E_lo, t3.E_hi, 2)} | {de:+.2f} ({lo:+.2f}, {hi:+.2f}) | {v} | {big} |")
+              f"| {_fmt(t2.E, t2.E_lo, t2.E_hi, 2)} | {_fmt(t3.E, t3.E_lo, t3.E_hi, 2)} | {de:+.2f} ({lo:+.2f}, {hi:+.2f}; {lo90:+.2f}, {hi90:+.2f}) | {v} | {big} |")
     b2, b3 = soil["periodic"], soil["periodic3d"]
     tphi = {k: (v.mean(), *stats.t.interval(0.95, v.size - 1, v.mean(), v.std(ddof=1) / math.sqrt(v.size)))
             for k, v in soil.items() if v.size >= 2}
@@ -150,7 +171,7 @@ def main(campaign: Path, save: Path | None) -> None:
     areal = iface[iface["profile_y"].notna()]
     if areal.empty:
         return
-    print("\n| sheared along | across | E measured | E of the 3D extruded teeth along | difference | verdict (± 0.05) | θa along [°] | E predicted by the fits (θr) |")
+    print("\n| sheared along | across | E measured | E of the 3D extruded teeth along | difference (one soil) | verdict (± 0.05) | θa along [°] | E predicted by the fits (θr) |")
     print("|---|---|---|---|---|---|---|---|")
     for rt_along, rt_across in ((1.0, 0.2), (0.2, 1.0)):
         ca, ce = case_of("periodic3d", rt_along, rt_across), case_of("periodic3d", rt_along)
@@ -161,7 +182,7 @@ def main(campaign: Path, save: Path | None) -> None:
         th_a, pred = _predicted(row, tphi.get("periodic3d", (math.nan,))[0])
         if ce is not None and ce in table.index:
             te = table.loc[ce]
-            de, lo, hi, v = e_difference(peaks(ce), soil["periodic3d"], peaks(ca), soil["periodic3d"])
+            de, lo, hi, v = shared_soil_e_difference(peaks(ce), peaks(ca), soil["periodic3d"])
             ext, diff = _fmt(te.E, te.E_lo, te.E_hi, 2), f"{de:+.2f} ({lo:+.2f}, {hi:+.2f})"
         else:
             ext, diff, v = "(not finished)", "—", "—"

@@ -67,8 +67,8 @@ def test_too_few_points_says_why():
 def test_breakpoint_keeps_three_points_each_side():
     x = np.arange(10.0)
     y = np.where(x < 1.5, 5.0 * x, 7.5)       # the "true" break is at 1.5: only 2 points left of it
-    f = fit_plateau(x, y, n_boot=0)
-    assert (x < f.c).sum() >= 3 and (x > f.c).sum() >= 3
+    f = fit_plateau(x, y, n_boot=0)           # a point at c is on both lines
+    assert (x <= f.c).sum() >= 3 and (x >= f.c).sum() >= 3 and f.c == 2.0
 
 
 def test_roundtrip_dict():
@@ -155,3 +155,25 @@ def test_study_fit_without_enough_points_says_why():
     out = fit_study(pts, n_boot=0)
     assert all(r.fit is None and r.reason.startswith("no fit") for r in out)
     assert pd.DataFrame([r.row() for r in out])["reason"].str.contains("< 7").any()
+
+
+def test_break_search_covers_every_corner_with_three_points_a_line():
+    # nine x: a break is admissible from the 3rd to the 7th x (a point at c is on both lines)
+    x = np.array([5.7, 10.9, 24.2, 39.4, 43.7, 49.1, 56.0, 64.8, 73.7])
+    y = 2.0 + 1.0 * x + 0.5 * np.maximum(x - 40.0, 0.0)
+    f = fit_hinge(x, y, n_boot=0)
+    assert f.c_range == (24.2, 56.0)
+    assert f.c == pytest.approx(40.0, abs=1e-6) and f.located
+
+
+def test_a_break_the_data_cannot_place_is_not_located():
+    # a straight line with noise: every admissible corner fits as well, the interval is the range
+    rng = np.random.default_rng(2)
+    x = np.linspace(0, 60, 9)
+    y = 1.0 + 0.8 * x + rng.normal(0, 3.0, x.size)
+    f = fit_hinge(x, y, n_boot=0)
+    assert f.c_interval_profile == pytest.approx(f.c_range)
+    assert not f.located
+    assert BilinearFit.from_dict(f.to_dict()).located is False
+    old = {k: v for k, v in f.to_dict().items() if k not in ("c_lo_range", "c_hi_range")}
+    assert BilinearFit.from_dict(old).located          # a file without the range: not judged

@@ -221,3 +221,20 @@ def test_skill_puts_the_criterion_beside_its_baselines_on_the_same_cases():
     assert s.loc[("all", "criterion"), "rms_deg"] == pytest.approx((11 / 3) ** 0.5)
     assert s.loc[("not fully mobilised", "δ = φ (the soil's own)"), "within_4deg"] == 0.0
     assert s.loc[("fully mobilised", "δ = min(φμ + θa, φ) (no fit)"), "mean_deg"] == 2.0
+
+
+def test_the_two_constant_rule_recovers_its_constants():
+    import pandas as pd
+
+    from interphase.analysis.criterion import fit_rule, rule_delta
+
+    rng = np.random.default_rng(0)
+    mu = rng.choice([0.05, 0.2, 0.5], 60)
+    ta = rng.uniform(0, 60, 60)
+    tp = np.full(60, 0.38)
+    delta = rule_delta(mu, ta, tp, 2.5, 1.04)
+    pts = pd.DataFrame({"friction_ps": mu, "theta_a_deg_92": ta, "tan_phi": tp,
+                        "peak_stress_ratio": np.tan(np.radians(delta))})
+    a, b = fit_rule(pts)
+    assert a == pytest.approx(2.5, abs=1e-2) and b == pytest.approx(1.04, abs=1e-3)
+    assert np.isnan(fit_rule(pts.iloc[:2])[0])

@@ -92,7 +92,13 @@ def test_validate_prints_criterion_and_baselines(tmp_path):
     assert all(r["delta_soil_deg"] == 36 for r in rows)
     for r in rows:
         assert r["error_predicted_deg"] == pytest.approx(r["delta_predicted_deg"] - r["delta_measured_deg"])
-    assert {s["prediction"] for s in res["skill"]} == {"criterion", "δ = φ (soil)", "δ = min(φμ + θa, φ)"}
+    fitted = "δ = min(φμ + θa − a, atan(b tan φ)), a, b fitted with the criterion"
+    assert {s["prediction"] for s in res["skill"]} == {"criterion", "δ = φ (soil)", "δ = min(φμ + θa, φ)", fitted}
+    from interphase.report.build import REPRODUCTION, load_criterion
+
+    a, b = load_criterion(REPRODUCTION).rule           # the shipped criterion's two constants
+    assert flat["delta_fitted_rule_deg"] == pytest.approx(
+        min(math.degrees(math.atan(0.2)) + flat["theta_a_deg"] - a, math.degrees(math.atan(b * math.tan(math.radians(36))))))
     assert res["largest_miss"]["row"] in (2, 3, 4)
     assert (tmp_path / "v" / "validation.png").stat().st_size > 10_000
 

@@ -276,7 +276,7 @@ def _write_validation(out: Path, df, sk) -> tuple[list, bool]:
     cols = {"row": "line", "soil": "soil", "surface": "surface", "normal_stress_kpa": "σn [kPa]", "theta_a_deg": "θa [°]",
             "delta_measured_deg": "δ lab [°]", "delta_predicted_deg": "δ criterion [°]", "delta_lo_deg": "lo",
             "delta_hi_deg": "hi", "error_predicted_deg": "error [°]", "delta_rule_deg": "δ rule [°]",
-            "delta_soil_deg": "δ = φ [°]"}
+            "delta_soil_deg": "δ = φ [°]", "delta_fitted_rule_deg": "δ fitted rule [°]"}
     if "delta_dem_deg" in df:
         cols |= {"delta_dem_deg": "δ DEM [°]", "error_dem_deg": "DEM error [°]"}
     texts = {"validation.csv": df.to_csv(index=False), "skill.csv": sk.to_csv(index=False),

@@ -4,12 +4,15 @@ Two models, both continuous at the breakpoint c (same units as x):
     hinge    y = b0 + b1·x + b2·(x − c)₊        coefficients (b0, b1, b2), slope b1 then b1 + b2
     plateau  y = b0 + b1·min(x, c)              coefficients (b0, b1), flat beyond c
 
-Fitting: every candidate c with at least MIN_SIDE points strictly on each side; least squares at
-each c (all candidates at once, normal equations batched in numpy); the best grid c is refined by
+Fitting: every admissible c — at least MIN_SIDE (3) points on each line, a point at c counting on
+both (the lines meet there), and two distinct x on each: c from the 3rd smallest x to the 3rd
+largest, `BilinearFit.c_range` —; least squares at each c (all candidates at once, normal equations batched in numpy); the best grid c is refined by
 scipy.optimize.minimize_scalar (bounded) between its grid neighbours and kept only if it lowers the
 RSS — so data with an exact breakpoint at a data x return that x exactly.
-Breakpoint intervals: (1) profile likelihood — every c with
-RSS(c) ≤ RSSmin·[1 + F0.95(1, n−p)/(n−p)], p = linear coefficients + 1 (c itself); (2) a seeded
+Breakpoint intervals: (1) profile likelihood — every c of the admissible range with
+RSS(c) ≤ RSSmin·[1 + F0.95(1, n−p)/(n−p)], p = linear coefficients + 1 (c itself); when that
+interval is the whole admissible range the data do not locate the break (`BilinearFit.located`
+False; the tables say "not located"): any corner the design allows fits as well; (2) a seeded
 residual bootstrap (refit on fitted + resampled centred residuals; percentile interval), which also
 gives the coefficient intervals — or, when the caller passes `replicates` (fit_study with a
 SeedEnsemble), a SEED bootstrap: each replicate's (x, y) are the physical cases' means over their
@@ -99,15 +102,16 @@ def _rss_one(u, y, c, model) -> float:
 
 
 def _candidates(u_sorted: np.ndarray) -> np.ndarray:
-    """Admissible breakpoints: data x and midpoints with ≥ MIN_SIDE points strictly on each side."""
+    """Admissible breakpoints: data x and midpoints with ≥ MIN_SIDE points on each line, a point at c
+    counting on both (the lines meet at c)."""
     ux = np.unique(u_sorted)
     mids = 0.5 * (ux[1:] + ux[:-1])
     cand = np.unique(np.concatenate([ux, mids]))
-    left = np.searchsorted(u_sorted, cand, side="left")              # points < c
-    right = u_sorted.size - np.searchsorted(u_sorted, cand, side="right")   # points > c
-    # and ≥ 2 distinct x on each side, or a side's slope is not identifiable
-    dleft = np.searchsorted(ux, cand, side="left")
-    dright = ux.size - np.searchsorted(ux, cand, side="right")
+    left = np.searchsorted(u_sorted, cand, side="right")              # points ≤ c
+    right = u_sorted.size - np.searchsorted(u_sorted, cand, side="left")   # points ≥ c
+    # and ≥ 2 distinct x on each line, or its slope is not identifiable
+    dleft = np.searchsorted(ux, cand, side="right")
+    dright = ux.size - np.searchsorted(ux, cand, side="left")
     cand = cand[(left >= MIN_SIDE) & (right >= MIN_SIDE) & (dleft >= 2) & (dright >= 2)]
     if cand.size > N_GRID_MAX:
         # thin evenly but keep every data x: exact breakpoints at data points stay reachable
@@ -163,7 +167,18 @@ class BilinearFit:
     level: float = 0.95
     n_boot: int = 0
     bootstrap: str = "residual"                 # "residual" | "seed": what the refits resampled
+    c_range: tuple[float, float] = (math.nan, math.nan)   # the admissible breakpoints (module doc)
     extra: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def located(self) -> bool:
+        """False when the profile interval is the whole admissible range: the data do not place the
+        break anywhere the design allows it to be (True when the range is unknown: older files)."""
+        lo, hi = self.c_range
+        if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
+            return True
+        tol = 1e-6 * (hi - lo)
+        return not (self.c_interval_profile[0] <= lo + tol and self.c_interval_profile[1] >= hi - tol)
 
     def predict(self, x) -> np.ndarray | float:
         x = np.asarray(x, dtype=float)
@@ -204,7 +219,8 @@ class BilinearFit:
              "c_hi_profile": self.c_interval_profile[1], "c_lo_boot": self.c_interval_bootstrap[0],
              "c_hi_boot": self.c_interval_bootstrap[1], "r2": self.r2, "rss": self.rss, "n": self.n,
              "x_min": self.x_range[0], "x_max": self.x_range[1], "level": self.level, "n_boot": self.n_boot,
-             "bootstrap": self.bootstrap}
+             "bootstrap": self.bootstrap, "c_lo_range": self.c_range[0], "c_hi_range": self.c_range[1],
+             "located": self.located}
         if "c_interval_residual" in self.extra:     # fit_study's seed-bootstrap fits also carry this
             d["c_lo_resid"], d["c_hi_resid"] = self.extra["c_interval_residual"]
         for i, (b, (lo, hi)) in enumerate(zip(self.coef, self.coef_interval)):
@@ -220,7 +236,8 @@ class BilinearFit:
                    coef_interval=tuple((float(d[f"b{i}_lo"]), float(d[f"b{i}_hi"])) for i in range(p)),
                    r2=float(d["r2"]), rss=float(d["rss"]), n=int(d["n"]),
                    x_range=(float(d["x_min"]), float(d["x_max"])), level=float(d.get("level", 0.95)),
-                   n_boot=int(d.get("n_boot", 0)), bootstrap=str(d.get("bootstrap") or "residual"))
+                   n_boot=int(d.get("n_boot", 0)), bootstrap=str(d.get("bootstrap") or "residual"),
+                   c_range=tuple(math.nan if d.get(k) is None else float(d[k]) for k in ("c_lo_range", "c_hi_range")))
 
 
 def _predict_params(model: str, params: np.ndarray, x: float) -> float:
@@ -335,7 +352,7 @@ def fit_bilinear(x, y, model: str = "hinge", *, level: float = 0.95, n_boot: int
     return BilinearFit(model=model, coef=coef, c=float(c), c_interval_profile=c_prof, c_interval_bootstrap=c_boot,
                        coef_interval=coef_iv, r2=float(r2), rss=rss, n=int(n),
                        x_range=(float(x[0]), float(x[-1])), level=level, n_boot=n_boot, bootstrap=kind,
-                       extra={"boot_params": boot_params, "grid_c": cand + x0, "grid_rss": grid_rss})
+                       c_range=(float(cand[0] + x0), float(cand[-1] + x0)), extra={"boot_params": boot_params, "grid_c": cand + x0, "grid_rss": grid_rss})
 
 
 def fit_hinge(x, y, **kw) -> BilinearFit:

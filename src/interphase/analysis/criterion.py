@@ -92,6 +92,7 @@ class CriterionModel:
     efficiency: object | None = None              # E vs θr
     reasons: dict = field(default_factory=dict)   # why a correlation is missing
     is_default: bool = False
+    rule: tuple | None = None    # (a [°], b) of δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases (fit_rule)
 
     @classmethod
     def study_defaults(cls, friction: float, tan_phi: float | None = None) -> "CriterionModel":
@@ -114,7 +115,8 @@ class CriterionModel:
         return {"schema": CRITERION_SCHEMA, "source": self.source, "about": about or {},
                 "tan_phi": self.tan_phi if math.isfinite(self.tan_phi) else None,
                 "theta_r": {str(k): fit(f) for k, f in self.theta_r.items()},
-                "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons)}
+                "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons),
+                "rule": _finite({"a_deg": self.rule[0], "b": self.rule[1]}) if self.rule else None}
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "criterion.json") -> "CriterionModel":
@@ -133,7 +135,8 @@ class CriterionModel:
 
         return cls(source=d["source"], tan_phi=math.nan if d.get("tan_phi") is None else float(d["tan_phi"]),
                    theta_r={("all" if k == "all" else float(k)): fit(v) for k, v in d["theta_r"].items()},
-                   ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}))
+                   ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}),
+                   rule=_rule_of(d.get("rule")))
 
     @classmethod
     def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
@@ -415,13 +418,49 @@ def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
     return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat_spaced, why)
 
 
-def check_cases(model: CriterionModel, points: pd.DataFrame) -> pd.DataFrame:
+def _rule_of(d) -> tuple | None:
+    """(a, b) of a criterion file's "rule" entry, None when absent or not finite (older files)."""
+    if not d or d.get("a_deg") is None or d.get("b") is None:
+        return None
+    return float(d["a_deg"]), float(d["b"])
+
+
+def rule_delta(friction, theta_a_deg, tan_phi, a_deg: float = 0.0, b: float = 1.0) -> np.ndarray:
+    """δ [°] of the rule δ = min(φμ + θa − a, atan(b·tan φ)): with a = 0, b = 1 the rule with no
+    fitted constant; `fit_rule` gives the best two constants."""
+    phimu = np.degrees(np.arctan(np.asarray(friction, float)))
+    cap = np.degrees(np.arctan(b * np.asarray(tan_phi, float)))
+    return np.minimum(phimu + np.asarray(theta_a_deg, float) - a_deg, cap)
+
+
+def fit_rule(points: pd.DataFrame) -> tuple[float, float]:
+    """The two constants (a [°], b) of δ = min(φμ + θa − a, atan(b·tan φ)) that fit the measured δ of
+    `points` (columns friction_ps, theta_a_deg_92, tan_phi, peak_stress_ratio = tan δ) best by least
+    squares in δ [°]: the fair baseline of a criterion fitted on the same cases (issue 41). NaN
+    without three usable cases."""
+    from scipy import optimize
+
+    num = lambda k: pd.to_numeric(points.get(k, pd.Series(dtype=float)), errors="coerce").to_numpy(float)
+    mu, ta, tp, td = (num(k) for k in ("friction_ps", "theta_a_deg_92", "tan_phi", "peak_stress_ratio"))
+    ok = np.isfinite(mu) & np.isfinite(ta) & np.isfinite(tp) & np.isfinite(td)
+    if ok.sum() < 3:
+        return math.nan, math.nan
+    delta = np.degrees(np.arctan(td[ok]))
+    sse = lambda p: float(np.sum((rule_delta(mu[ok], ta[ok], tp[ok], p[0], p[1]) - delta) ** 2))
+    best = min((optimize.minimize(sse, x0, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-8})
+                for x0 in ((0.0, 1.0), (3.0, 1.05), (-3.0, 0.95))), key=lambda r: r.fun)
+    return float(best.x[0]), float(best.x[1])
+
+
+def check_cases(model: CriterionModel, points: pd.DataFrame, rule: tuple[float, float] | None = None) -> pd.DataFrame:
     """The chain run on every physical case of a points table (correlations.prepare_points /
     seed_ensemble) against what the simulation measured: one row per case with the predicted and
     measured θr [°], E and tan δ, δ [°], and `error_deg` = δ predicted − δ measured (the study's
     measure of its criterion: < 4° against the lab). The prediction uses the case's own θa (both
     filters), flat spacing, friction and its box ensemble's tan φ; a case the chain cannot take
-    (θa outside a fit's range, a missing correlation) keeps NaN and the reason in `note`."""
+    (θa outside a fit's range, a missing correlation) keeps NaN and the reason in `note`. Beside it,
+    the baselines' errors (PREDICTORS); `rule` = (a, b) of the two-constant rule (`fit_rule`, fitted
+    by the caller on the same cases as the criterion; NaN columns without it)."""
     rows = []
     col = lambda r, k: float(r[k]) if k in r and pd.notna(r[k]) else math.nan
     for _, r in points.iterrows():
@@ -445,9 +484,12 @@ def check_cases(model: CriterionModel, points: pd.DataFrame) -> pd.DataFrame:
     # the two baselines a criterion must beat (docs/reproduction.md): the soil's own strength on every
     # surface, and a rule with no fit at all, δ = min(φμ + θa, φ)
     soil = deg(df["tan_phi"])
-    rule = np.minimum(np.degrees(np.arctan(df["friction_ps"])) + df["theta_a_deg_92"], soil)
     df["error_soil_deg"] = soil - df["delta_measured_deg"]
-    df["error_rule_deg"] = rule - df["delta_measured_deg"]
+    df["error_rule_deg"] = rule_delta(df["friction_ps"], df["theta_a_deg_92"], df["tan_phi"]) - df["delta_measured_deg"]
+    a, b = rule if rule is not None else (math.nan, math.nan)
+    df["rule_a_deg"], df["rule_b"] = a, b
+    df["error_fitted_rule_deg"] = rule_delta(df["friction_ps"], df["theta_a_deg_92"], df["tan_phi"], a, b) \
+        - df["delta_measured_deg"]
     df["mobilised"] = pd.to_numeric(df["E_measured"], errors="coerce") >= FULLY_MOBILISED_E
     return df
 
@@ -455,16 +497,17 @@ def check_cases(model: CriterionModel, points: pd.DataFrame) -> pd.DataFrame:
 #: a case counts as fully mobilised when its measured E (seed means) reaches this
 FULLY_MOBILISED_E = 0.95
 PREDICTORS = {"error_deg": "criterion", "error_soil_deg": "δ = φ (the soil's own)",
-              "error_rule_deg": "δ = min(φμ + θa, φ) (no fit)"}
+              "error_rule_deg": "δ = min(φμ + θa, φ) (no fit)",
+              "error_fitted_rule_deg": "δ = min(φμ + θa − a, atan(b tan φ)) (2 fitted)"}
 
 
 def skill(df: pd.DataFrame) -> pd.DataFrame:
-    """The criterion beside its two baselines (PREDICTORS), on all cases, on the fully mobilised ones
+    """The criterion beside its baselines (PREDICTORS; the fitted rule where check_cases had it), on all cases, on the fully mobilised ones
     (E measured ≥ FULLY_MOBILISED_E) and on the rest: per predictor and subset, n, rms and mean error [°
     of δ] and the share within 4°. Only cases all three predict are counted, so that each row
     compares the same cases."""
     rows = []
-    cols = [c for c in PREDICTORS if c in df]
+    cols = [c for c in PREDICTORS if c in df and df[c].notna().any()]
     ok = df.dropna(subset=cols)
     full = ok["mobilised"].astype(bool)
     for subset, part in (("all", ok), ("fully mobilised", ok[full]), ("not fully mobilised", ok[~full])):

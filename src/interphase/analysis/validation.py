@@ -6,7 +6,11 @@ where tan φ is the soil's own peak direct-shear strength: the laboratory's (`so
 the row gives it, else the soil card's element test at the nearest stress (said per row).
 Beside it, two predictions that need no criterion (docs/methods.md §10):
   δ_soil = φ                    the soil's strength for every surface (full mobilisation);
-  δ_rule = min(φμ + θa, φ)      the surface's friction plus its asperity angle, capped at the soil.
+  δ_rule = min(φμ + θa, φ)      the surface's friction plus its asperity angle, capped at the soil;
+  δ_fitted = min(φμ + θa − a, atan(b·tan φ))   the same rule with the two constants fitted on the
+                                the criterion's own cases (CriterionModel.rule; NaN when the model
+                                has none, e.g. the study's readings): the fair baseline of a fitted
+                                criterion (issue 41).
 Errors are δ − δ measured in degrees; `within_4` is the study's test (|error| < 4°).
 """
 
@@ -100,9 +104,12 @@ def predict_rows(table, model_for, card=None, default_phi: tuple[float, str] | N
         row["efficiency_measured"] = math.tan(math.radians(row["delta_measured_deg"])) / math.tan(math.radians(phi))
         row["delta_soil_deg"] = phi
         row["delta_rule_deg"] = min(math.degrees(math.atan(mu)) + theta_a, phi)
+        a, b = model.rule if getattr(model, "rule", None) else (math.nan, math.nan)
+        row["delta_fitted_rule_deg"] = min(math.degrees(math.atan(mu)) + theta_a - a,
+                                           math.degrees(math.atan(b * math.tan(math.radians(phi)))))
         out.append(row)
     df = pd.DataFrame(out)
-    for k in ("predicted", "soil", "rule"):
+    for k in ("predicted", "soil", "rule", "fitted_rule"):
         df[f"error_{k}_deg"] = df[f"delta_{k}_deg"] - df["delta_measured_deg"]
     df["within_4"] = df["error_predicted_deg"].abs() < TOLERANCE_DEG
     return df
@@ -116,7 +123,10 @@ def skill(df: pd.DataFrame, mobilised_efficiency: float = 0.95) -> pd.DataFrame:
     for subset, mask in (("all rows", np.ones(len(df), bool)),
                          ("not fully mobilised (measured E < 0.95)", (e_meas < mobilised_efficiency).to_numpy())):
         for name, col in (("criterion", "error_predicted_deg"), ("δ = φ (soil)", "error_soil_deg"),
-                          ("δ = min(φμ + θa, φ)", "error_rule_deg")):
+                          ("δ = min(φμ + θa, φ)", "error_rule_deg"),
+                          ("δ = min(φμ + θa − a, atan(b tan φ)), a, b fitted with the criterion", "error_fitted_rule_deg")):
+            if col not in df or df[col].isna().all():
+                continue
             e = df.loc[mask, col].dropna().to_numpy(float)
             rows.append({"subset": subset, "prediction": name, "n": int(e.size),
                          "rms_deg": float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan,

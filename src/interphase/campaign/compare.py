@@ -4,8 +4,9 @@ against the seed scatter (analysis.difference: agree / differ / undecided at a t
 Physical cases are matched by label without the seed (`…-s3`), so the two campaigns must differ only
 in what the labels do not name (stiffness, speed, box size, rolling friction, damping …). Per-seed
 values, each at its own ensemble's reading (analysis.ensemble):
-  tan_delta, tan_phi        the seed's mean ratio over the smoothing window at the peak of its
-                            ensemble's seed-mean curve (interface: the surface; box: the shear plane)
+  tan_delta, tan_phi        the seed's leave-one-out peak value: its smoothed ratio where the mean
+                            curve of its ensemble's OTHER seeds peaks (analysis.ensemble.peak_values;
+                            interface: the surface; box: the shear plane)
   tan_delta_cs, tan_phi_cs  the seed's mean ratio over the last 40 % of the shear
   E, E_cs                   the seed's interface value over its own box test's (pair_id)
   theta_r_deg               θr at the surface at the run's peak snapshot [deg]

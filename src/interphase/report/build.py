@@ -31,7 +31,8 @@ import numpy as np
 import pandas as pd
 
 from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
-from interphase.analysis.criterion import CriterionModel, check_cases, check_summary, fitted_soil_tan_phi, skill
+from interphase.analysis.criterion import (CriterionModel, check_cases, check_summary, fit_rule, fitted_soil_tan_phi,
+                                           skill)
 from interphase.analysis.ensemble_table import ensemble_tables
 from interphase.campaign.results import open_campaign, recipe_notes, write_curves, write_summaries
 from interphase.errors import InputError
@@ -79,19 +80,20 @@ CHECK_COLUMNS = {"fold": "fold", "group": "group", "physical_case": "case", "fri
 def criterion_checks(chain: CriterionModel, points: pd.DataFrame) -> pd.DataFrame | None:
     """check_cases with the campaign's own fits (fold 'in-sample') and, when there are at least two
     groups, with fits made WITHOUT each group on that group (fold 'group held out': the criterion
-    predicting surfaces it has not seen, as a user's new surface). None without θa–θr and E–θr fits."""
+    predicting surfaces it has not seen, as a user's new surface). The two-constant rule is fitted on
+    the same cases in each fold (fit_rule). None without θa–θr and E–θr fits."""
     from interphase.analysis.correlations import fit_study
 
     if not chain.theta_r or chain.efficiency is None or points.empty:
         return None
-    folds = [check_cases(chain, points).assign(fold="in-sample")]
+    folds = [check_cases(chain, points, fit_rule(points)).assign(fold="in-sample")]
     groups = points["group"].astype(str)
     if groups.nunique() >= 2:
         keys = [SPECS[k] for k in ("fig6_8", "fig6_9", "fig6_10a")]
         for g in sorted(groups.unique()):
             rest = points[groups != g]
             model = criterion_from_fits(fit_study(rest, keys, n_boot=0), rest, f"without {g}")
-            folds.append(check_cases(model, points[groups == g]).assign(fold="group held out"))
+            folds.append(check_cases(model, points[groups == g], fit_rule(rest)).assign(fold="group held out"))
     return pd.concat(folds, ignore_index=True)
 
 
@@ -108,10 +110,21 @@ def check_notes(checks: pd.DataFrame) -> list[str]:
                      f"{s['p5']:+.2f}° to {s['p95']:+.2f}°, {100 * s['within_4deg']:.0f} % within 4°, largest miss "
                      f"{s['max_abs']:.2f}° ({s['worst_case']}, {s['worst_group']})"
                      + (f"; {s['n_without']} case(s) outside the chain's reach" if s["n_without"] else ""))
+        notes += _rule_note(fold, g)
         for r in skill(g).itertuples():
             notes.append(f"{fold}, {r.subset}: {r.predictor}: {r.n} cases, rms {r.rms_deg:.2f}°, "
                          f"{100 * r.within_4deg:.0f} % within 4°")
     return notes
+
+
+def _rule_note(fold: str, checks: pd.DataFrame) -> list[str]:
+    """The two-constant rule's constants in a fold (held out: their range over the groups left out)."""
+    if "rule_a_deg" not in checks or not checks["rule_a_deg"].notna().any():
+        return []
+    a, b = checks["rule_a_deg"].dropna(), checks["rule_b"].dropna()
+    span = lambda v, f: f"{v.min():{f}}" if v.nunique() == 1 else f"{v.min():{f}} to {v.max():{f}}"
+    return [f"{fold}: δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases as the criterion"
+            f"{'' if fold == 'in-sample' else ' (without each group)'}: a = {span(a, '.2f')}°, b = {span(b, '.3f')}"]
 
 
 def write_criterion(model: CriterionModel, points: pd.DataFrame, path: Path, prov: str) -> Path:
@@ -142,8 +155,10 @@ def criterion_from_fits(fits, points: pd.DataFrame, source: str) -> CriterionMod
         out[key] = f.fit if f is not None else None
         if f is not None and f.fit is None:
             reasons[key] = f.reason
+    a, b = fit_rule(points)
     return CriterionModel(source=source, tan_phi=fitted_soil_tan_phi(points), theta_r=theta_r,
-                          ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons)
+                          ratio=out["fig6_9"], efficiency=out["fig6_10a"], reasons=reasons,
+                          rule=(a, b) if math.isfinite(a) else None)
 
 
 def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
@@ -162,8 +177,10 @@ def provenance(store=None, summaries: pd.DataFrame | None = None) -> str:
             rid = prov.get("recipe_id") or meta.get("recipe_id") or meta.get("template_hash")   # older folders
             if rid:
                 thash.add(str(rid))
-    elif summaries is not None and "engine" in summaries:
-        engines |= set(summaries["engine"].dropna().astype(str))
+    if not engines and summaries is not None:       # no case folders (committed tables): the summaries' columns
+        col = next((c for c in ("engine_version", "engine") if c in summaries), None)
+        engines |= set(summaries[col].dropna().astype(str)) if col else set()
+        thash |= set(summaries["recipe_id"].dropna().astype(str)) if "recipe_id" in summaries and not thash else set()
     today = _dt.datetime.now(_dt.timezone.utc).date().isoformat()
     return (f"interphase-dem {__version__}; engine {', '.join(sorted(engines)) or 'unknown'}; "
             f"recipe {', '.join(sorted(thash)) or 'unknown'}; report template {template_hash()}; {today}")
@@ -236,6 +253,7 @@ LAB_COLUMNS = {"row": "line", "soil": "soil", "surface": "surface", "normal_stre
                "delta_measured_deg": "δ measured [°]", "delta_predicted_deg": "δ predicted [°]",
                "delta_lo_deg": "δ lo [°]", "delta_hi_deg": "δ hi [°]", "error_predicted_deg": "error [°]",
                "error_soil_deg": "error, δ = φ [°]", "error_rule_deg": "error, δ = min(φμ + θa, φ) [°]",
+               "error_fitted_rule_deg": "error, δ = min(φμ + θa − a, atan(b tan φ)) [°]",
                "source": "source", "table_or_figure": "table or figure", "note": "note"}
 
 
@@ -357,8 +375,9 @@ def _tables(m: ReportModel) -> list:
         tables.append(T.Table("lab_comparison", "Predicted vs measured interface friction angle",
                               m.lab[list(LAB_COLUMNS)].rename(columns=LAB_COLUMNS),
                               ["δ = atan(E·tan φ); tan φ: the laboratory's own soil test where the file gives it, "
-                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ and "
-                               "δ = min(φμ + θa, φ) (docs/validation.md)."]))
+                               "else the campaign's simulated soil (column 'φ from'); baselines: δ = φ, "
+                               "δ = min(φμ + θa, φ), and δ = min(φμ + θa − a, atan(b tan φ)) with a, b fitted on "
+                               "the campaign's cases (docs/validation.md)."]))
     return tables
 
 

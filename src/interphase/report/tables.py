@@ -311,7 +311,8 @@ def ensembles_table(df: pd.DataFrame) -> Table:
     shown["note"] = df["note"].fillna("")
     return Table("ensembles", "Seed ensembles: tan δ, tan φ and E at the peak and the critical state, 95 % intervals",
                  shown.reset_index(drop=True),
-                 ["Peak: the maximum of the seed-mean curve (smoothed over 0.5 D50), over the seeds' values there; "
+                 ["Peak: leave-one-out, each seed's curve (smoothed over 0.5 D50) read where the other seeds' mean "
+                  "curve peaks, the mean of those values (docs/methods.md); "
                   "critical state: mean of the last 40 % of the shear; E = tan δ / tan φ of the seed means; θr: mean "
                   "of the seeds' peak-snapshot θr at the surface (ψ, degrees from vertical).", INTERVAL_NOTE],
                  csv=df)
@@ -363,7 +364,7 @@ def results_tables(points: pd.DataFrame) -> list[Table]:
         notes = ["Angles ψ, degrees from vertical (positive toward −x); θa = 0 marks a non-dilative surface."]
         if per_case:
             notes.append("One row per physical case: the mean over its seeds (runs). tan δ, tan φ and E are the seed "
-                         "ensemble's (peak of the seed-mean curve; E with its box tests' bootstrap interval), as in the "
+                         "ensemble's (the leave-one-out peak; E with its box tests' interval), as in the "
                          "ensembles table, which also has the critical state; other columns: the mean of the seeds' "
                          "values.")
             notes.append(INTERVAL_NOTE)
@@ -397,14 +398,16 @@ def coefficient_table(fit_results) -> Table:
             civ = list(f.coef_interval) + [(np.nan, np.nan)] * (3 - len(f.coef_interval))
             row |= {"b0": coef[0], "b0 95%": iv(*civ[0]), "b1": coef[1], "b1 95%": iv(*civ[1]),
                     "b2": coef[2], "b2 95%": iv(*civ[2]) if f.model == "hinge" else "",
-                    "c": f.c, "c 95% (profile)": iv(*f.c_interval_profile),
+                    "c": f.c, "c 95% (profile)": _profile_text(f, iv),
+                    "c admissible": iv(*f.c_range), "c located": f.located,
                     "c 95% (bootstrap)": iv(*f.c_interval_bootstrap), "bootstrap": f.bootstrap,
                     "c 95% (residual)": iv(*f.extra["c_interval_residual"]) if "c_interval_residual" in f.extra
                     else "", "R² [-]": f.r2, "note": ""}
         rows.append(row)
     df = pd.DataFrame(rows)
     order = ["figure", "y", "x", "model", "slice", "n", "b0", "b0 95%", "b1", "b1 95%", "b2", "b2 95%", "c",
-             "c 95% (profile)", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)", "R² [-]", "note"]
+             "c 95% (profile)", "c admissible", "c located", "c 95% (bootstrap)", "bootstrap", "c 95% (residual)",
+             "R² [-]", "note"]
     df = df.reindex(columns=[c for c in order if c in df.columns])
     shown = _coefficients_shown(df)
     return Table("correlations", "Bilinear correlations: hinge y = b0 + b1·x + b2·(x − c)₊, plateau y = b0 + b1·min(x, c)",
@@ -413,7 +416,17 @@ def coefficient_table(fit_results) -> Table:
                       "seed: every physical case's seeds (and its box tests') drawn with replacement, means refitted; "
                       "residual: fitted + resampled residuals (where fewer than half the cases have two seeds) — c "
                       "also by profile likelihood (F test) and, beside a seed bootstrap, by the residual bootstrap "
-                      "on the same means (docs/methods.md §7)."], csv=df)
+                      "on the same means (docs/methods.md §7). c is searched over every break with at least "
+                      "three points on each line (a point at c counts on both): 'c admissible'; a profile "
+                      "interval that is that whole range reads 'not located' (the data fit any corner the "
+                      "design allows), one that reaches an end of it is open there."], csv=df)
+
+
+def _profile_text(f, iv) -> str:
+    """The profile interval of c as a table cell: "not located" when it is the admissible range."""
+    if not f.located:
+        return "not located " + iv(*f.c_range)
+    return iv(*f.c_interval_profile)
 
 
 def _coefficients_shown(df: pd.DataFrame) -> pd.DataFrame:

@@ -1,0 +1,93 @@
+"""Everything `campaign report` fits, written again from the committed summaries and curves (no runs
+folder, no engine): the seed ensembles, the correlations with their seed bootstrap, criterion.json,
+the criterion's check against every case, and the findings tables.
+
+    PYTHONPATH=src python bench/refit_reproduction.py [--study] [--sandlike] [--out DIR] [--boot N]
+        [--figures] [--commit]
+
+--study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/.
+The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
+repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
+(and, with --figures, its figures to docs/reproduction/figures/); the sand-like soil's
+correlations.csv, criterion.json, ensembles.csv and Figs. 6.8, 6.10a to docs/reproduction/group1_sandlike/.
+Bootstrap refits per correlation: 99 (the shipped criterion's count) unless --boot.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).parent))
+from sequential_coverage import _Curves  # noqa: E402
+
+from interphase.campaign.schema import load_campaign  # noqa: E402
+from interphase.report.build import analyse, write  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+REPRO = ROOT / "docs" / "reproduction"
+SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
+        "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml")}
+
+
+class CommittedRuns(_Curves):
+    """A store with the committed curves and no case folders (provenance from the summaries)."""
+
+    def case_folder(self, cid):
+        return Path("/nonexistent-runs-folder") / str(cid)      # reads of it fail: no provenance, no series
+
+
+def refit(name: str, out: Path, n_boot: int, figures: bool):
+    folder, campaign_file = SETS[name]
+    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str})
+    store = CommittedRuns(folder / "curves.parquet")
+    try:
+        campaign = load_campaign(campaign_file)
+    except Exception as exc:                 # the input tables are decoration: fit without them
+        print(f"{campaign_file}: {exc}; no input tables", file=sys.stderr)
+        campaign = None
+    model = analyse(summ, campaign=campaign, store=store, n_boot=n_boot)
+    if not figures:
+        import interphase.report.build as B
+        B._figures = lambda m, fdir, store, res: ([], [])
+    res = write(model, out / name, store=store)
+    print(f"{name}: wrote {len(res.files)} files to {out / name}")
+    return out / name
+
+
+def commit(name: str, report: Path, figures: bool) -> None:
+    if name == "study":
+        shutil.copy(report / "criterion.json", ROOT / "src" / "interphase" / "data" / "criterion_reproduction.json")
+        if figures:
+            for png in (REPRO / "figures").glob("*.png"):
+                shutil.copy(report / "figures" / png.name, png)
+        return
+    dest = SETS[name][0]
+    shutil.copy(report / "criterion.json", dest / "criterion.json")
+    shutil.copy(report / "tables" / "correlations.csv", dest / "correlations.csv")
+    if figures:
+        for png in dest.glob("*.png"):
+            shutil.copy(report / "figures" / png.name, png)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--study", action="store_true")
+    ap.add_argument("--sandlike", action="store_true")
+    ap.add_argument("--out", default="/tmp/refit")
+    ap.add_argument("--boot", type=int, default=99)
+    ap.add_argument("--figures", action="store_true")
+    ap.add_argument("--commit", action="store_true")
+    args = ap.parse_args(argv)
+    for name in [n for n in SETS if getattr(args, n)]:
+        report = refit(name, Path(args.out), args.boot, args.figures)
+        if args.commit:
+            commit(name, report, args.figures)
+
+
+if __name__ == "__main__":
+    main()
