@@ -4,11 +4,13 @@ curves, intervals from the seeds.
 
 Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compression positive):
   - the seed-mean curves: each seed's R(ε1) and εv(ε1) interpolated on a common grid of GRID_STEP
-    up to the shortest run's ε1, averaged over the seeds, R smoothed over SMOOTH_EPS1
-    (analysis.cell_run); `shear_state` of those curves gives φ_peak, ε1 at peak, ψ_max, the end state.
-  - intervals (95 %, Student t over the seeds): φ_peak from each seed's mean R over the smoothing
-    window at the seed-mean curve's peak (the peak state of each seed), mapped through
-    asin((R − 1)/(R + 1)); ψ_max from each seed's dilatancy rate over the seed-mean curve's 1 %
+    up to the shortest run's ε1, R smoothed over SMOOTH_EPS1 (analysis.cell_run), averaged over the
+    seeds; `shear_state` of those curves gives ε1 at peak, ψ_max and the end state.
+  - φ_peak: the tool's peak (analysis.ensemble.peak_values, leave-one-out: each seed's smoothed R
+    read where the other seeds' mean curve peaks, so that no seed chooses the location of its own
+    value; docs/methods.md has its bias against seed count), the mean of those seed values mapped
+    through asin((R − 1)/(R + 1)), interval Student t on them.
+  - intervals (95 %, Student t over the seeds): ψ_max from each seed's dilatancy rate over the seed-mean curve's 1 %
     window of largest dilation; φ_cs (the end state: mean R over the last END_SPAN of ε1) from each
     seed's end value; e from each seed's void ratio at the start of the compression.
   - relative density Dr = (e_max − e)/(e_max − e_min), e the mean void ratio at the start of the
@@ -25,7 +27,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from interphase.analysis.cell_run import SMOOTH_EPS1
-from interphase.analysis.ensemble import t_interval
+from interphase.analysis.ensemble import peak_values, t_interval
 from interphase.analysis.strength import moving_average
 from interphase.analysis.triaxial import END_SPAN, WINDOW, friction_angle, psi_from_rate, shear_state
 
@@ -92,10 +94,9 @@ def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limi
         nan = math.nan
         return CellResult(test, confining_stress, 0, *(nan,) * 16, preparation, "no finished run")
     grid, R, V = mean_curves(runs)
-    r_mean = moving_average(grid, R.mean(axis=0), SMOOTH_EPS1)
-    state = shear_state(grid, V.mean(axis=0), r_mean)
-    near = np.abs(grid - state.eps1_peak) <= SMOOTH_EPS1 / 2
-    seed_peak = R[:, near].mean(axis=1)
+    smooth = np.array([moving_average(grid, r, SMOOTH_EPS1) for r in R])
+    state = shear_state(grid, V.mean(axis=0), smooth.mean(axis=0))
+    seed_peak, _ = peak_values(smooth)
     inside = (grid >= state.eps1_psi) & (grid <= state.eps1_psi + WINDOW)
     seed_rate = np.array([-np.polyfit(grid[inside], v[inside], 1)[0] for v in V])
     tail = grid >= grid[-1] - END_SPAN
@@ -108,7 +109,8 @@ def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limi
         notes.append(f"still dilating at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is the end "
                      "state's angle, not yet a critical state")
     return CellResult(
-        test, confining_stress, n, state.phi_peak_deg, *_interval(seed_peak, friction_angle), state.eps1_peak,
+        test, confining_stress, n, float(friction_angle(np.mean(seed_peak))), *_interval(seed_peak, friction_angle),
+        state.eps1_peak,
         state.psi_max_deg, *_interval(seed_rate, psi_from_rate), state.phi_end_deg,
         *_interval(seed_end, friction_angle), state.dilatancy_end, float(e.mean()), *_interval(e), dr,
         float(grid[-1]), preparation, "; ".join(notes))
