@@ -274,7 +274,7 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
     calib, history, n_runs = _sample(target, budget, runs, tag, e_min, executor, jobs, stream, rerun_failed)
     chosen, posterior, ess = _posterior(calib, list(target.free), target)
     card = _card(target, {**target.soil, **chosen}, name, card_at)
-    seeds = list(range(1, 3))
+    seeds = list(range(1, min(2, int(budget["final_seeds"])) + 1))      # the density limits: 2 seeds (1 when quick)
     prep, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=runs / f"density{tag}", executor=executor,
                              jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     density = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(target.cell["n_grains"]),
