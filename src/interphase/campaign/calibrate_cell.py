@@ -23,7 +23,8 @@ record's own (analysis.triaxial on the record: the same code), φ at the end aga
 given, and the relative density of its specimen at the record's σ3′ against the record's Dr0. The
 model's Dr needs its own e_min (the frictionless preparation: the same for every sample, measured
 once) and e_max (the loosest packing at the sample's own friction: one token consolidation per
-sample), both at the reference stress (campaign/density.py). Likelihood spreads ∝ TOLERANCES.
+sample), both at the record's stress, as every relative density of the model is (campaign/density.py,
+`preparation_at`). Likelihood spreads ∝ TOLERANCES.
 
 After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains),
 then the laboratory's test on it at the fitted record and at every held-out one, each at that record's
@@ -134,12 +135,12 @@ def _card(target: CellTarget, soil: dict, name: str, path: Path) -> SoilCard:
 
 
 def e_min_once(target, runs: Path, executor, jobs, stream, rerun_failed) -> float:
-    """The frictionless preparation's void ratio at the reference stress (the same for every sample:
-    preparation 0 scales both frictions to 0), seeds 1–2."""
-    from interphase.campaign.density import REFERENCE_STRESS, TOKEN_STRAIN
+    """The frictionless preparation's void ratio at the fitted record's stress (the same for every
+    sample: preparation 0 scales both frictions to 0), seeds 1–2."""
+    from interphase.campaign.density import TOKEN_STRAIN
 
     probe = _card(target, {**target.soil, **{k: r[0] for k, r in target.free.items()}}, target.name, target.path)
-    base = probe.cell_case(REFERENCE_STRESS, axial_strain=TOKEN_STRAIN, preparation=0.0)
+    base = probe.cell_case(nominal(target.record.confining_stress), axial_strain=TOKEN_STRAIN, preparation=0.0)
     base.pop("seed")
     path = write_campaign(runs / "e_min.toml", name=f"calibrate-{target.name}-e-min", case=base,
                           sweep={"seed": [1, 2]}, description="the grains' frictionless packing")
@@ -158,7 +159,7 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
     from grainlearning.dynamic_systems import DynamicSystem
 
     from interphase.campaign.cell import cell_of
-    from interphase.campaign.density import REFERENCE_STRESS, TOKEN_STRAIN
+    from interphase.campaign.density import TOKEN_STRAIN
 
     names, rec = list(target.free), target.record
     obs = [q for q in QUANTITIES if q in target.values]
@@ -175,7 +176,7 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
                               zip_=zip_, sweep={"seed": list(range(1, int(budget["seeds"]) + 1))},
                               description=f"calibration of {target.name}, iteration {it}")
         loose = {k: v for k, v in zip_.items() if k != "preparation"}
-        tok = {k: v for k, v in probe.cell_case(REFERENCE_STRESS, axial_strain=TOKEN_STRAIN).items()
+        tok = {k: v for k, v in probe.cell_case(nominal(rec.confining_stress), axial_strain=TOKEN_STRAIN).items()
                if k not in names and k != "seed"} | {"preparation": 1.0}
         tpath = write_campaign(runs / f"iteration-{it}{tag}-e-max.toml", name=f"calibrate-{target.name}-i{it}-e-max",
                                case=tok, zip_=loose, description="each sample's loosest packing")

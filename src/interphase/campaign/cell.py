@@ -34,9 +34,10 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
              rerun_failed: bool = False, **changes):
     """The laboratory's element test (triaxial or biaxial, the card's [cell]) of `card` at each
     confining stress [Pa] on packing seeds `seeds`. At `relative_density` (a fraction), each stress's
-    preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min)
-    (campaign.density.preparation_at: the laboratory's Dr0 is after consolidation too); without it,
-    the card's preparation. Returns CellResults."""
+    preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min),
+    the limits those the preparation makes at that stress (campaign.density.preparation_at: the
+    laboratory's Dr0 is after consolidation too); without it, the card's preparation. Either way the
+    results carry the relative density on those limits. Returns CellResults."""
     from interphase.campaign.density import preparation_at
 
     from interphase.campaign.folders import element_runs
@@ -45,11 +46,10 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
     output = element_runs(card.path, card.name, output)[0]
     stresses = [float(s) for s in confining_stresses]
     seeds = [int(s) for s in seeds]
-    prep = {s: card.soil.get("preparation", 1.0) for s in stresses}
-    if relative_density is not None:
-        prep = {s: preparation_at(card, relative_density, s, seeds, test=test, output=output / "density",
-                                  executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
-                for s in stresses}
+    mapped = {s: preparation_at(card, relative_density, s, seeds, test=test, output=output / "density",
+                                executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+              for s in stresses}
+    prep = {s: card.soil.get("preparation", 1.0) if mapped[s][0] is None else mapped[s][0] for s in stresses}
     base = card.cell_case(stresses[0], test=test, **changes)
     for k in ("normal_stress", "seed", "preparation"):
         base.pop(k, None)
@@ -60,5 +60,5 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
                           description=f"{test} test of the soil card {card.path}")
     planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream,
                                            rerun_failed=rerun_failed)
-    return [cell_of(cases, series, summ, e_limits=card.void_ratio_limits)
+    return [cell_of(cases, series, summ, e_limits=mapped[s][1])
             for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]

@@ -55,32 +55,33 @@ def measure_density(card: SoilCard, seeds, *, output: Path | None = None, execut
     return {"card": str(card.path), "written": written, **table}
 
 
-def preparation_at(card: SoilCard, relative_density: float, stress: float, seeds, *, test: str | None = None,
-                   output: Path, executor=None, jobs=None, stream=None, rerun_failed: bool = False) -> float:
-    """The preparation whose specimen, consolidated to `stress` [Pa], has the void ratio of relative
-    density Dr on the card's limits: e = e_max − Dr (e_max − e_min). The map e(preparation) at that
-    stress is measured (token compressions at PREPARATIONS on the first MAP_SEEDS of `seeds`;
-    resumable) and inverted linearly."""
+def preparation_at(card: SoilCard, relative_density: float | None, stress: float, seeds, *, test: str | None = None,
+                   output: Path, executor=None, jobs=None, stream=None,
+                   rerun_failed: bool = False) -> tuple[float | None, tuple[float, float]]:
+    """(preparation, (e_min, e_max)) at `stress` [Pa]: the limits are the void ratios the preparation
+    makes at that stress, frictionless (0) and at the grains' own friction (1), from the map
+    e(preparation) measured there (token compressions at PREPARATIONS on the first MAP_SEEDS of
+    `seeds`; resumable); the preparation is that map inverted at e = e_max − Dr (e_max − e_min), None
+    without a relative density. Why the test's stress and not the index tests' near-zero one: the
+    soft grains squeeze (at G = 50 MPa a packing's e falls ~0.07 from 10 to 100 kPa, docs/soils.md),
+    a sand's barely; on limits at 10 kPa a dense specimen at 100 kPa read Dr 1.5 and one Dr would mean
+    looser and looser packings as the stress rises."""
     from interphase.errors import InputError
 
-    e_min, e_max = card.void_ratio_limits
-    if not np.isfinite([e_min, e_max]).all():
-        raise InputError(f"the card {card.path.name} has no [density] table: its grains' e_min and e_max are not "
-                         "measured", where=str(card.path), fix=f"run `campaign density {card.path}` first")
-    if not 0 <= relative_density <= 1:
+    if relative_density is not None and not 0 <= relative_density <= 1:
         raise InputError(f"relative density {relative_density!r} is not a fraction in [0, 1]",
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
     prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], test=test, output=output, executor=executor,
                              jobs=jobs, stream=stream, rerun_failed=rerun_failed)
-    target = e_max - relative_density * (e_max - e_min)
-    ok = np.isfinite(e)
-    order = np.argsort(e[ok])
-    if not (e[ok].min() <= target <= e[ok].max()):
-        raise InputError(f"relative density {relative_density:g} is e = {target:.4f} on the card's limits, outside what "
-                         f"its preparation makes at {stress / 1e3:g} kPa ({e[ok].min():.4f}–{e[ok].max():.4f})",
-                         where="--relative-density", fix="ask for a density within that range (docs/soils.md: the soft "
-                         "grains' squeeze at high stress)")
-    return round(float(np.interp(target, e[ok][order], np.asarray(prep)[ok][order])), 4)
+    limits = (float(e[0]), float(e[-1]))
+    if relative_density is None:
+        return None, limits
+    if not np.isfinite(e).all():
+        raise InputError(f"the void-ratio map at {stress / 1e3:g} kPa has runs that did not finish", where=str(output),
+                         fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
+    target = limits[1] - relative_density * (limits[1] - limits[0])
+    order = np.argsort(e)
+    return round(float(np.interp(target, e[order], np.asarray(prep)[order])), 4), limits
 
 
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,

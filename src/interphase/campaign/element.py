@@ -50,7 +50,10 @@ def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = Non
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False, rerun_failed=rerun_failed)
+    report = run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False,
+                          rerun_failed=rerun_failed)
+    if report.interrupted:      # Ctrl-C, SIGTERM, a full disk: the command stops here, not only this campaign
+        raise KeyboardInterrupt(report.stopped or "interrupted")
     campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}
@@ -143,7 +146,10 @@ def run_cell_cases(path: Path, *, executor=None, jobs=None, stream=None, rerun_f
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
-    run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False, rerun_failed=rerun_failed)
+    report = run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False,
+                          rerun_failed=rerun_failed)
+    if report.interrupted:      # Ctrl-C, SIGTERM, a full disk: the command stops here, not only this campaign
+        raise KeyboardInterrupt(report.stopped or "interrupted")
     campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}
