@@ -72,6 +72,13 @@ def test_cell_fields_enter_only_a_cell_case_identity():
     assert case_id(a, "liggghts", "r") == case_id(a.replace(shear_velocity=0.01, box_length_d50=12.0), "liggghts", "r")
 
 
+def test_yade_refuses_the_cell_with_the_engine_that_runs_it():
+    from interphase.engines.yade import Yade
+
+    with pytest.raises(InputError, match="LIGGGHTS only"):
+        Yade().render(cell_case("biaxial"))
+
+
 def test_the_deck_servoes_every_free_axis_and_the_2d_one_scales_its_stress():
     from interphase.engines.liggghts import Liggghts
 

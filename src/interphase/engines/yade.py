@@ -104,6 +104,9 @@ class Yade(Engine):
     template_suffix = ".py.j2"
 
     def render(self, case: Case) -> dict[str, str | bytes]:
+        if case.cell:
+            raise InputError(f"the {case.test} cell runs in LIGGGHTS only for now", where="case.test",
+                             fix='run it with engine = "liggghts" (docs/soils.md: the laboratory\'s test on the model)')
         if case.three_d:
             raise InputError("the 3D device (periodic3d) runs in LIGGGHTS only for now", where="case.device",
                              fix='run it with engine = "liggghts" (docs/3d.md says what is not done yet)')
