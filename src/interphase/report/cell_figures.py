@@ -21,9 +21,11 @@ def curves_figure(pairs, path: Path) -> list[Path]:
     from interphase.analysis.cell_ensemble import mean_curves
 
     n = len(pairs)
-    fig, ax = plt.subplots(2, n, figsize=(2.6 * n + 0.6, 5.2), sharex=True, squeeze=False)
+    cols = min(5, n)
+    groups = -(-n // cols)
+    fig, ax = plt.subplots(2 * groups, cols, figsize=(2.6 * cols + 0.6, 4.4 * groups), squeeze=False)
     for j, (title, lab, runs) in enumerate(pairs):
-        top, bottom = ax[0, j], ax[1, j]
+        top, bottom = ax[2 * (j // cols), j % cols], ax[2 * (j // cols) + 1, j % cols]
         top.plot(100 * lab["eps1"], lab["ratio"], color="k", lw=1.2, label="laboratory")
         bottom.plot(100 * lab["eps1"], 100 * lab["epsv"], color="k", lw=1.2)
         if runs:
@@ -33,10 +35,14 @@ def curves_figure(pairs, path: Path) -> list[Path]:
                 a.plot(100 * grid, y.mean(axis=0), color="C0", lw=1.2, label=f"model ({len(runs)} seeds)")
         top.set_title(title, fontsize=8)
         bottom.set_xlabel("ε1 [%]")
-        if j == 0:
+        if j % cols == 0:
             top.set_ylabel("σ1′/σ3′")
             bottom.set_ylabel("εv [%]")
+        if j == 0:
             top.legend(fontsize=7, frameon=False)
+    for k in range(n, groups * cols):
+        ax[2 * (k // cols), k % cols].axis("off")
+        ax[2 * (k // cols) + 1, k % cols].axis("off")
     fig.tight_layout()
     return _save(fig, path)
 
@@ -62,6 +68,9 @@ def angles_figure(rows, path: Path) -> list[Path]:
             ax[k].errorbar(s * 1.03, m, yerr=[m - lo, hi - m], fmt="s", color=f"C{i}", ms=4, capsize=2,
                            label=f"model, Dr ≈ {d:.1f}")
         ax[k].set_xscale("log")
+        ticks = sorted({round(r["confining_stress"] / 1e3) for r in rows})
+        ax[k].set_xticks(ticks, [f"{t:g}" for t in ticks])
+        ax[k].minorticks_off()
         ax[k].set_xlabel("σ3′ [kPa]")
         ax[k].set_ylabel("φ_peak [°]" if k == 0 else "ψ_max [°]")
     ax[0].legend(fontsize=7, frameon=False)
