@@ -22,8 +22,8 @@ import pandas as pd
 from interphase.analysis.triaxial import shear_state
 from interphase.campaign.calibrate import verdict
 from interphase.campaign.calibrate_cell import nominal
-from interphase.campaign.cell import run_cell
-from interphase.campaign.element import run_cell_cases
+from interphase.campaign.cell import cell_campaign_file, run_cell
+from interphase.campaign.element import CELL_SERIES, run_cases
 from interphase.io.lab_triaxial import read_triaxial
 from interphase.soil import load_card
 
@@ -35,10 +35,9 @@ def verify(card, path: Path, e_lim, seeds, runs: Path) -> tuple[dict, tuple]:
     t = rec.table
     lab = shear_state(t.eps1, t.epsv, t.ratio, t.e)
     dr = (e_lim[1] - rec.e0) / (e_lim[1] - e_lim[0])
-    sigma = nominal(rec.sigma3_start)
-    (r,) = run_cell(card, [sigma], seeds, relative_density=min(1.0, max(0.0, dr)), output=runs)
-    name = f"{card.cell['test']}-{card.name}-dr{min(1.0, max(0.0, dr)):g}"
-    planned, series, _ = run_cell_cases(runs / f"{name}.toml")
+    sigma, asked = nominal(rec.sigma3_start), min(1.0, max(0.0, dr))
+    (r,) = run_cell(card, [sigma], seeds, relative_density=asked, output=runs)
+    planned, series, _ = run_cases(cell_campaign_file(runs, card, card.cell["test"], asked), columns=CELL_SERIES)
     model = [(s["eps1"].to_numpy(), s["epsv"].to_numpy(), s["ratio"].to_numpy())
              for p in planned if p.case.normal_stress == sigma and (s := series.get(p.case_id)) is not None]
     row = {"record": path.stem, "confining_stress": sigma, "relative_density": dr,

@@ -42,13 +42,14 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from interphase.campaign.calibrate import _iterate, _posterior, _quiet, _clean, verdict
-from interphase.campaign.element import run_cell_cases, write_campaign
+from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
+from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
+from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields
 
 QUANTITIES = ("phi_peak_deg", "psi_max_deg", "phi_cs_deg", "relative_density")
-TOLERANCES = {"phi_peak_deg": 1.5, "psi_max_deg": 2.0, "phi_cs_deg": 1.5, "relative_density": 0.05}
+TOLERANCES = {**ANGLE_TOLERANCES, "relative_density": 0.05}     # [°], and Dr [-]
 FREE_FIELDS = ("friction_pp", "rolling_friction", "preparation")
 BUDGET = {"samples": 12, "iterations": 3, "seeds": 2, "final_seeds": 3, "ess_target": 0.3, "components": 2}
 QUICK = {"samples": 3, "iterations": 1, "seeds": 1, "final_seeds": 1}
@@ -144,7 +145,8 @@ def e_min_once(target, runs: Path, executor, jobs, stream, rerun_failed) -> floa
     base.pop("seed")
     path = write_campaign(runs / "e_min.toml", name=f"calibrate-{target.name}-e-min", case=base,
                           sweep={"seed": [1, 2]}, description="the grains' frictionless packing")
-    planned, series, _ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    planned, series, _ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed,
+                                   columns=CELL_SERIES)
     vals = [float(series[p.case_id]["e"].iloc[0]) for p in planned if p.case_id in series]
     if not vals:
         raise InputError("the frictionless packing did not finish", where=str(path), fix="see `campaign status`")
@@ -182,10 +184,10 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
                                case=tok, zip_=loose, description="each sample's loosest packing")
         print(f"calibrate {target.name}: iteration {it}, {len(params)} samples × {budget['seeds']} seed(s) → {path}",
               file=stream, flush=True)
-        planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream,
-                                               rerun_failed=rerun_failed)
-        tplanned, tseries, _ = run_cell_cases(tpath, executor=executor, jobs=jobs, stream=stream,
-                                              rerun_failed=rerun_failed)
+        planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream,
+                                               rerun_failed=rerun_failed, columns=CELL_SERIES)
+        tplanned, tseries, _ = run_cases(tpath, executor=executor, jobs=jobs, stream=stream,
+                                              rerun_failed=rerun_failed, columns=CELL_SERIES)
         n_runs[0] += len(planned) + len(tplanned)
         sim = np.zeros((len(params), len(obs), 1))
         for k, nm in enumerate(zip_["name"]):
@@ -215,18 +217,11 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
     return calib, history, n_runs[0]
 
 
-def _checks(lab: dict, r, dr_lab: float | None = None) -> list[dict]:
-    out = []
-    for q in ("phi_peak_deg", "psi_max_deg", "phi_cs_deg"):
-        if q in lab:
-            v, lo, hi = (getattr(r, q + k) for k in ("", "_lo", "_hi"))
-            out.append({"quantity": q, "laboratory": float(lab[q]), "measured": v, "lo": lo, "hi": hi,
-                        "difference": v - float(lab[q]), "tolerance": TOLERANCES[q],
-                        "verdict": verdict(float(lab[q]), lo, hi, TOLERANCES[q])})
-    if dr_lab is not None:
-        out.append({"quantity": "relative_density", "laboratory": dr_lab, "measured": r.relative_density,
-                    "difference": r.relative_density - dr_lab, "tolerance": TOLERANCES["relative_density"]})
-    return out
+def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
+    """calibrate.compare's verdicts on the angles, and the specimens' relative density beside them."""
+    return compare(lab, r) + [{"quantity": "relative_density", "laboratory": dr_lab, "measured": r.relative_density,
+                               "difference": r.relative_density - dr_lab,
+                               "tolerance": TOLERANCES["relative_density"]}]
 
 
 def nominal(stress: float) -> float:
@@ -301,10 +296,10 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
 def _write(path: Path, target: CellTarget, result: dict, name: str) -> None:
     t = target.raw["target"]
     data = {"soil": {"name": name, "description": str(t.get("description", "")), **target.soil, **result["chosen"]},
-            "cell": {k: v for k, v in target.cell.items()}, "density": result["density"], "target": t,
+            "cell": dict(target.cell), "density": result["density"],
+            "target": {**t, "free": {k: list(v) for k, v in target.free.items()}},
             "posterior": result["posterior"], "achieved": result["achieved"], "verification": result["verification"],
             "calibration": result["calibration"]}
-    data["target"] = {**t, "free": {k: list(v) for k, v in target.free.items()}}
     head = (f"# Soil card {name}: written by `campaign calibrate {target.path.name}` against laboratory records\n"
             "# (the laboratory's own test on the model, docs/soils.md). [soil] and [cell] are what a campaign uses.\n")
     if result["calibration"]["quick"]:

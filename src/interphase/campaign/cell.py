@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from interphase.campaign.element import run_cell_cases, write_campaign
+from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.soil import SoilCard
 
 
@@ -27,6 +27,12 @@ def cell_of(cases, series: dict, summ: pd.DataFrame, *, e_limits=(np.nan, np.nan
         voids.append(float(s["e"].iloc[0]))
     first = cases[0].case
     return cell_result(first.test, first.normal_stress, runs, voids, e_limits=e_limits, preparation=first.preparation)
+
+
+def cell_campaign_file(output: Path, card: SoilCard, test: str, relative_density: float | None) -> Path:
+    """The generated campaign file `run_cell` writes (and reads back) in `output`."""
+    return Path(output) / (f"{test}-{card.name}" + ("" if relative_density is None else f"-dr{relative_density:g}")
+                           + ".toml")
 
 
 def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = None, relative_density: float | None = None,
@@ -53,12 +59,13 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
     base = card.cell_case(stresses[0], test=test, **changes)
     for k in ("normal_stress", "seed", "preparation"):
         base.pop(k, None)
-    name = f"{test}-{card.name}" + ("" if relative_density is None else f"-dr{relative_density:g}")
+    path = cell_campaign_file(output, card, test, relative_density)
+    name = path.stem
     groups = [{"name": f"s{s:g}", "case": {"normal_stress": s, "preparation": prep[s]}, "sweep": {"seed": seeds}}
               for s in stresses]
-    path = write_campaign(output / f"{name}.toml", name=name, case=base, groups=groups,
+    path = write_campaign(path, name=name, case=base, groups=groups,
                           description=f"{test} test of the soil card {card.path}")
-    planned, series, summ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream,
-                                           rerun_failed=rerun_failed)
+    planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream,
+                                           rerun_failed=rerun_failed, columns=CELL_SERIES)
     return [cell_of(cases, series, summ, e_limits=mapped[s][1])
             for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from interphase.campaign.element import run_cell_cases, write_campaign
+from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.soil import SoilCard
 
 PREPARATIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -93,7 +93,8 @@ def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: P
     path = write_campaign(Path(output) / f"{name}.toml", name=name, case=base,
                           sweep={"preparation": list(PREPARATIONS), "seed": [int(s) for s in seeds]},
                           description=f"void ratio against preparation of the soil card {card.path}")
-    planned, series, _ = run_cell_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    planned, series, _ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed,
+                                   columns=CELL_SERIES)
     e = []
     for prep in PREPARATIONS:
         vals = [float(series[p.case_id]["e"].iloc[0]) for p in planned

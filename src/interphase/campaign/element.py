@@ -40,11 +40,16 @@ def write_campaign(path: Path, *, name: str, case: dict, sweep: dict | None = No
     return path
 
 
+#: the series columns the element tests read: the periodic shear's, and the cell's (io/cell.py)
+SHEAR_SERIES = ("shear_disp", "stress_ratio", "platen_z")
+CELL_SERIES = ("eps1", "epsv", "e", "ratio")
+
+
 def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None,
-              rerun_failed: bool = False):
-    """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame}, summaries
-    table of the finished ones). Failed cases are reported by the run and left out of the results
-    (`failures` says why); `rerun_failed` runs them again."""
+              rerun_failed: bool = False, columns=SHEAR_SERIES):
+    """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame of
+    `columns`}, summaries table of the finished ones). Failed cases are reported by the run and left
+    out of the results (`failures` says why); `rerun_failed` runs them again."""
     from interphase.campaign.plan import plan
     from interphase.campaign.run import run_campaign
     from interphase.campaign.schema import load_campaign
@@ -59,12 +64,12 @@ def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = Non
     series = {}
     with CampaignStore(campaign.output) as store:
         summ = store.summaries()
+        done = set(summ["case_id"]) if len(summ) else set()
         for p in planned:
-            if p.case_id in set(summ["case_id"]) if len(summ) else False:
+            if p.case_id in done:
                 try:
                     folder = store.case_folder(p.case_id)
-                    series[p.case_id] = pd.read_parquet(folder / "series.parquet",
-                                                        columns=["shear_disp", "stress_ratio", "platen_z"])
+                    series[p.case_id] = pd.read_parquet(folder / "series.parquet", columns=list(columns))
                     series[p.case_id].attrs["folder"] = str(folder)
                 except (OSError, ValueError, KeyError):
                     pass
@@ -137,30 +142,3 @@ def element_failures(card: SoilCard, output=None) -> list[str]:
 
     path = element_runs(card.path, card.name, output)[0] / f"element-{card.name}.toml"
     return failures(path) if path.exists() else []
-
-
-def run_cell_cases(path: Path, *, executor=None, jobs=None, stream=None, rerun_failed: bool = False):
-    """run_cases for cell campaigns: their series are the cell histories (io/cell.py)."""
-    from interphase.campaign.plan import plan
-    from interphase.campaign.run import run_campaign
-    from interphase.campaign.schema import load_campaign
-    from interphase.campaign.store import CampaignStore
-
-    report = run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False,
-                          rerun_failed=rerun_failed)
-    if report.interrupted:      # Ctrl-C, SIGTERM, a full disk: the command stops here, not only this campaign
-        raise KeyboardInterrupt(report.stopped or "interrupted")
-    campaign = load_campaign(path)
-    planned = plan(campaign)
-    series = {}
-    with CampaignStore(campaign.output) as store:
-        summ = store.summaries()
-        done = set(summ["case_id"]) if len(summ) else set()
-        for p in planned:
-            if p.case_id in done:
-                try:
-                    series[p.case_id] = pd.read_parquet(store.case_folder(p.case_id) / "series.parquet",
-                                                        columns=["eps1", "epsv", "e", "ratio"])
-                except (OSError, ValueError, KeyError):
-                    pass
-    return planned, series, summ.set_index("case_id") if len(summ) else summ

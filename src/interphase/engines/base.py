@@ -203,11 +203,15 @@ class Engine(abc.ABC):
             cause, message = died_of_signal(self.label, -rc)
         if cause:
             raise EngineError(cause, message, command=cmd, returncode=rc, log_tail=log_tail(log), folder=folder)
-        outputs = self.outputs if not (folder / "cell.json").exists() else ("history.txt",)
-        for name in outputs:
+        for name in self.required_outputs(folder):
             if not (folder / name).exists():
                 raise EngineError("missing_output", f"{self.label} finished without writing {name}", command=cmd,
                                   returncode=rc, log_tail=log_tail(log), folder=folder)
+
+    def required_outputs(self, folder: Path) -> tuple[str, ...]:
+        """The files the run in `folder` must leave (an engine whose tests leave different files
+        overrides it)."""
+        return self.outputs
 
     @abc.abstractmethod
     def read_results(self, folder: str | os.PathLike) -> Results:

@@ -50,7 +50,7 @@ class Cell:
 
     @property
     def three_d(self) -> bool:
-        return self.case.test == "triaxial"
+        return self.case.three_d          # triaxial runs in the periodic3d cell (Case.CELL_TESTS)
 
     @property
     def thickness(self) -> float:

@@ -164,6 +164,10 @@ class Liggghts(Engine):
         first = next((ln for ln in text.splitlines() if "ERROR" in ln), f"return code {returncode}")
         return cause, first.strip() if cause else ""
 
+    def required_outputs(self, folder: Path) -> tuple[str, ...]:
+        """A cell run (cell.json, engines/cell.py) leaves its history only; a shear run also its dumps."""
+        return ("history.txt",) if (Path(folder) / "cell.json").exists() else self.outputs
+
     def read_results(self, folder) -> Results:
         from interphase.io.liggghts import read_folder
 
