@@ -41,8 +41,11 @@ venv: $(VENV)/.installed
 
 deps: debs venv
 
+# the tests in parallel, one worker per core; tests sharing an expensive fixture, and the SLURM
+# tests, are grouped onto one worker each (tests/conftest.py, xdist_group)
+TEST_WORKERS ?= auto
 test: deps
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
 run: deps
 	$(VENV)/bin/campaign run campaigns/quick.toml

@@ -51,6 +51,31 @@ def pytest_collection_modifyitems(config, items):
     if unmarked:
         raise pytest.UsageError("tests that run an engine without its marker (add @pytest.mark.<engine>):\n  "
                                 + "\n  ".join(unmarked))
+    for item in items:
+        group = xdist_group(item)
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+
+
+def xdist_group(item) -> str | None:
+    """The worker group of a test under `pytest -n N --dist loadgroup` (make test): tests that share
+    an expensive fixture wider than one test run on one worker, so that it is built once, not once per
+    worker. quick_campaign (a real campaign, shared by nine files) is one group; the SLURM tests are
+    one group (each module brings up its own daemons: one cluster at a time, no two racing for free
+    ports); a test using a module- or session-scoped fixture of tests/ runs with its module. Every
+    other test goes to whichever worker is free."""
+    if item.get_closest_marker("slurm") is not None:
+        return "slurm"
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return None
+    if "quick_campaign" in info.names_closure:
+        return "quick_campaign"
+    for defs in info.name2fixturedefs.values():
+        d = defs[-1]
+        if d.scope != "function" and getattr(d.func, "__module__", "").startswith("tests"):
+            return item.nodeid.split("::")[0]
+    return None
 
 
 def need_binary(name: str) -> str:

@@ -48,6 +48,10 @@ for line in out.splitlines():
 """
 
 
+#: [s] the credential lifetime, and so the hold of a requeued job (AuthInfo cred_expire)
+CRED_EXPIRE = 10
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -94,7 +98,9 @@ class SlurmCluster:
             "SlurmdUser": user,
             "AuthType": "auth/munge",
             "CredType": "cred/munge",
-            "AuthInfo": f"socket={self.socket}",
+            # cred_expire: how long a requeued job is held before it may start again (default 120 s,
+            # SLURM 22.05); a job released sooner is refused by slurmd ("Job credential revoked")
+            "AuthInfo": f"socket={self.socket},cred_expire={CRED_EXPIRE}",
             "StateSaveLocation": r / "state",
             "SlurmdSpoolDir": r / "spool",
             "SlurmctldPidFile": self.pidfiles["slurmctld"],
@@ -113,6 +119,8 @@ class SlurmCluster:
             "MinJobAge": 3600,
             "KillWait": 5,
             "SchedulerType": "sched/builtin",
+            # the main scheduling loop every 2 s (default 60 s): a requeued job starts soon after its hold
+            "SchedulerParameters": "sched_interval=2",
         }
         text = "\n".join(f"{k}={v}" for k, v in lines.items())
         text += (f"\nNodeName=localhost NodeAddr=127.0.0.1 CPUs={self.cpus} RealMemory={self.memory_mb} State=UNKNOWN"

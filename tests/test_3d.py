@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import re
-import time
 
 import numpy as np
 import pandas as pd
@@ -135,10 +134,8 @@ def test_a_tiny_3d_case_carries_the_platen_load_and_keeps_its_grains(tmp_path):
 
     need_binary("liggghts")
     case = Case(**TINY3D)
-    t0 = time.perf_counter()
     res = run_single(case, "liggghts", tmp_path / "case")
     assert res["status"] == "done", res
-    assert time.perf_counter() - t0 < 60
     r = read_folder(tmp_path / "case")
     h = r.history[r.history["shear_disp"] >= 0]
     target = case.normal_stress * case.box_length * case.box_depth

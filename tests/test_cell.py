@@ -72,6 +72,22 @@ def test_cell_fields_enter_only_a_cell_case_identity():
     assert case_id(a, "liggghts", "r") == case_id(a.replace(shear_velocity=0.01, box_length_d50=12.0), "liggghts", "r")
 
 
+def test_a_card_names_the_relative_density_it_stands_for_and_a_bad_one_is_refused(tmp_path):
+    from interphase.soil import load_card
+
+    path = tmp_path / "s.toml"
+    path.write_text(CARD.format(name="s", test="triaxial", n=200, strain=0.03) + "relative_density = 0.81\n")
+    card = load_card(path)
+    assert card.relative_density == 0.81
+    assert "relative_density" not in card.cell_case(100e3)            # a run's default, not a Case field
+    shipped = load_card(ROOT / "soils" / "karlsruhe-fine-sand.toml")
+    assert shipped.relative_density == pytest.approx(0.81)            # the series TMD16-20 (issue 37)
+    path.write_text(CARD.format(name="s", test="triaxial", n=200, strain=0.03) + "relative_density = 81\n")
+    with pytest.raises(InputError, match=r"relative_density.*fraction") as err:
+        load_card(path)
+    assert str(path) in str(err.value) or "s.toml" in str(err.value)
+
+
 def test_yade_refuses_the_cell_with_the_engine_that_runs_it():
     from interphase.engines.yade import Yade
 

@@ -20,7 +20,7 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("--confining-stress", type=float, action="append", metavar="PA",
                    help="triaxial/biaxial: confining stress σ3′ [Pa] (repeatable)")
     p.add_argument("--relative-density", type=float, default=None, metavar="DR",
-                   help="triaxial/biaxial: relative density, a fraction (default: the card's preparation)")
+                   help="triaxial/biaxial: relative density, a fraction (default: the card's [cell] relative_density, else its preparation)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
     p.add_argument("--shear-velocity", type=float, default=None, metavar="M/S",
                    help="shear speed [m/s] (default: the card's [element] speed, else 0.02: quasi-static)")

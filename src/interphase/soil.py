@@ -48,7 +48,14 @@ class SoilCard:
     @property
     def cell(self) -> dict:
         """The card's [cell] protocol over CELL_DEFAULTS (2D cards: `test = "biaxial"`)."""
-        return {**CELL_DEFAULTS, **self.extra.get("cell", {})}
+        return {**CELL_DEFAULTS, **{k: v for k, v in self.extra.get("cell", {}).items() if k != "relative_density"}}
+
+    @property
+    def relative_density(self) -> float | None:
+        """The relative density [-] the card's cell tests are run at when none is asked ([cell]
+        relative_density: the laboratory series the card stands for); None: at its preparation."""
+        v = self.extra.get("cell", {}).get("relative_density")
+        return None if v is None else float(v)
 
     def cell_case(self, confining_stress: float, seed: int = 1, *, test: str | None = None, **changes) -> dict:
         """The laboratory's element test (triaxial / biaxial) as a [case] table (plain data)."""
@@ -173,8 +180,11 @@ def _check_cell(card: SoilCard, bad) -> None:
     from interphase.case import case_from_dict
 
     for key in card.extra.get("cell", {}):
-        if key not in CELL_DEFAULTS:
-            raise bad("cell", key, f"{key!r} is not a cell field", f"use {', '.join(CELL_DEFAULTS)}")
+        if key not in (*CELL_DEFAULTS, "relative_density"):
+            raise bad("cell", key, f"{key!r} is not a cell field", f"use {', '.join(CELL_DEFAULTS)}, relative_density")
+    dr = card.extra.get("cell", {}).get("relative_density")
+    if dr is not None and not (isinstance(dr, (int, float)) and 0 <= dr <= 1):
+        raise bad("cell", "relative_density", f"must be a fraction in [0, 1], got {dr!r}", "e.g. relative_density = 0.81")
     if card.cell["test"] not in ("triaxial", "biaxial"):
         raise bad("cell", "test", f"unknown cell test {card.cell['test']!r}", 'use "triaxial" (3D) or "biaxial" (2D)')
     try:

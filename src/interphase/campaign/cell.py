@@ -42,13 +42,15 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
     confining stress [Pa] on packing seeds `seeds`. At `relative_density` (a fraction), each stress's
     preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min),
     the limits those the preparation makes at that stress (campaign.density.preparation_at: the
-    laboratory's Dr0 is after consolidation too); without it, the card's preparation. Either way the
-    results carry the relative density on those limits. Returns CellResults."""
+    laboratory's Dr0 is after consolidation too); without it, the card's [cell] relative_density, else
+    the card's preparation. Either way the results carry the relative density on those limits.
+    Returns CellResults."""
     from interphase.campaign.density import preparation_at
 
     from interphase.campaign.folders import element_runs
 
     test = test or card.cell["test"]
+    relative_density = card.relative_density if relative_density is None else relative_density
     output = element_runs(card.path, card.name, output)[0]
     stresses = [float(s) for s in confining_stresses]
     seeds = [int(s) for s in seeds]
