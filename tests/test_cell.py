@@ -133,6 +133,15 @@ def test_the_seed_ensemble_finds_a_known_peak_and_dilatancy():
     assert r.relative_density == pytest.approx((0.8 - 0.608) / 0.3)
 
 
+def test_two_seeds_far_apart_give_an_interval_that_ends_at_minus_90_degrees_not_nan():
+    x = np.linspace(0, 0.2, 401)
+    curve = lambda peak: 1 + (peak - 1) * x / 0.05 * np.exp(1 - x / 0.05)            # noqa: E731
+    runs = [(x, 0.5 * x - 20 * x ** 2 * k, curve(p)) for k, p in ((1, 2.0), (4, 6.0))]
+    r = cell_result("biaxial", 100e3, runs, [0.17, 0.18])
+    assert r.phi_peak_deg_lo == pytest.approx(-90.0) and r.phi_peak_deg < r.phi_peak_deg_hi < 90
+    assert r.psi_max_deg_lo == pytest.approx(-90.0) and np.isfinite(r.psi_max_deg_hi)
+
+
 # ---- real LIGGGHTS ---------------------------------------------------------------------------------
 @pytest.mark.liggghts
 @pytest.mark.parametrize("test", ["triaxial", "biaxial"])

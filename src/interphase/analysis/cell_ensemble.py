@@ -80,9 +80,12 @@ def _sorted(x, y):
     return x[o], y[o]
 
 
-def _interval(values, fn=lambda v: v):
+def _interval(values, fn=lambda v: v, floor: float = -math.inf):
+    """The 95 % interval of `values` mapped through `fn`. Bounds below `floor` (where fn is
+    defined: R ≥ 0, r ≥ −1) are held at it: two seeds far apart (t = 12.7) can reach below, and the
+    angle's interval then ends at −90°, not NaN."""
     lo, hi = t_interval(np.asarray(values, float))
-    return float(fn(lo)), float(fn(hi))
+    return float(fn(max(lo, floor))), float(fn(max(hi, floor)))
 
 
 def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limits=(math.nan, math.nan),
@@ -109,10 +112,10 @@ def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limi
         notes.append(f"still dilating at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is the end "
                      "state's angle, not yet a critical state")
     return CellResult(
-        test, confining_stress, n, float(friction_angle(np.mean(seed_peak))), *_interval(seed_peak, friction_angle),
+        test, confining_stress, n, float(friction_angle(np.mean(seed_peak))), *_interval(seed_peak, friction_angle, 0.0),
         state.eps1_peak,
-        state.psi_max_deg, *_interval(seed_rate, psi_from_rate), state.phi_end_deg,
-        *_interval(seed_end, friction_angle), state.dilatancy_end, float(e.mean()), *_interval(e), dr,
+        state.psi_max_deg, *_interval(seed_rate, psi_from_rate, -1.0), state.phi_end_deg,
+        *_interval(seed_end, friction_angle, 0.0), state.dilatancy_end, float(e.mean()), *_interval(e), dr,
         float(grid[-1]), preparation, "; ".join(notes))
 
 
