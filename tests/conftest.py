@@ -57,6 +57,16 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.xdist_group(group))
 
 
+def pytest_collection_finish(session):
+    """Under --dist loadgroup, xdist groups a test by a "@group" suffix of its node id; on pytest
+    9.2 that suffix no longer takes (pytest-dev/pytest-xdist#1386) and grouped fixtures would be
+    built on every worker: refuse rather than run slowly in silence."""
+    if session.config.getvalue("loadgroup") and any(
+            it.get_closest_marker("xdist_group") and "@" not in it.nodeid for it in session.items):
+        raise pytest.UsageError("pytest-xdist did not group the tests (--dist loadgroup): pytest "
+                                f"{pytest.__version__} is too new for it; `make test` installs pytest < 9.2")
+
+
 def xdist_group(item) -> str | None:
     """The worker group of a test under `pytest -n N --dist loadgroup` (make test): tests that share
     an expensive fixture wider than one test run on one worker, so that it is built once, not once per
