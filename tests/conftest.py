@@ -61,7 +61,7 @@ def pytest_collection_finish(session):
     """Under --dist loadgroup, xdist groups a test by a "@group" suffix of its node id; on pytest
     9.2 that suffix no longer takes (pytest-dev/pytest-xdist#1386) and grouped fixtures would be
     built on every worker: refuse rather than run slowly in silence."""
-    if session.config.getvalue("loadgroup") and any(
+    if getattr(session.config.option, "loadgroup", False) and any(
             it.get_closest_marker("xdist_group") and "@" not in it.nodeid for it in session.items):
         raise pytest.UsageError("pytest-xdist did not group the tests (--dist loadgroup): pytest "
                                 f"{pytest.__version__} is too new for it; `make test` installs pytest < 9.2")
