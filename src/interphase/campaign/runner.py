@@ -177,15 +177,17 @@ def run_case(case: Case, engine: EngineSpec | Engine, folder: str | os.PathLike,
     if (folder / st.DONE).exists():
         return {"case_id": cid, "status": "done", "skipped": True, "cause": None, "message": None,
                 "elapsed": 0.0}
-    folder.mkdir(parents=True, exist_ok=True)
-    kill_stale_engines(folder)
-    _clean(folder)
     started = time.time()
     stage = "setup"
-    # a first case.json before anything can fail, so that the folder is always indexable
-    st.write_json_atomic(folder / st.CASE_JSON, {**meta, "case_id": cid, "engine": engine.name,
-                                                 "inputs": case.canonical(), "started": started})
+    # the preparation is inside the try: an interruption that lands here (a case handed to a worker
+    # just as the campaign is stopped is signalled at once) is recorded like one mid-run
     try:
+        folder.mkdir(parents=True, exist_ok=True)
+        kill_stale_engines(folder)
+        _clean(folder)
+        # a first case.json before anything can fail, so that the folder is always indexable
+        st.write_json_atomic(folder / st.CASE_JSON, {**meta, "case_id": cid, "engine": engine.name,
+                                                     "inputs": case.canonical(), "started": started})
         if isinstance(engine, EngineSpec):
             engine = engine.build()
         record = _start_record(case, engine, meta, cid, started)

@@ -1,0 +1,37 @@
+"""An interruption anywhere in `run_case` leaves a folder the next `campaign run` reads as
+interrupted, never as an unexplained 'incomplete' one."""
+
+from __future__ import annotations
+
+from interphase.campaign import runner
+from interphase.campaign import store as st
+from interphase.campaign.runner import Interrupted, run_case
+from interphase.case import Case
+from interphase.engines.base import engine_spec
+from interphase.surface.spec import ProfileSpec
+
+
+def test_interruption_while_the_folder_is_prepared_is_recorded(tmp_path, monkeypatch):
+    # a case handed to a pool worker just as the campaign stops is signalled at once: the signal
+    # can land right after its first case.json, before the engine starts (the CI failure of stop 37)
+    write = st.write_json_atomic
+    calls = []
+
+    def write_then_interrupt(path, data):
+        write(path, data)
+        calls.append(path.name)
+        if path.name == st.CASE_JSON and len(calls) == 1:
+            raise Interrupted("SIGINT")
+
+    monkeypatch.setattr(runner.st, "write_json_atomic", write_then_interrupt)
+    folder = tmp_path / "case"
+    case = Case(profile=ProfileSpec.make("flat"))
+    try:
+        run_case(case, engine_spec("liggghts"), folder, {"case_id": "c1"})
+    except Interrupted:
+        pass
+    else:
+        raise AssertionError("the interruption was swallowed")
+    assert (folder / st.CASE_JSON).exists()
+    assert st.folder_status(folder) == "interrupted"
+    assert st.read_json(folder / st.FAILURE_JSON)["cause"] == "interrupted"
