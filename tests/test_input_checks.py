@@ -77,3 +77,11 @@ def test_unstated_converged_settings_are_named(tmp_path):
     _, camp = _all_three(tmp_path, 'device = "periodic"\nshear_velocity = 0.02\nshear_modulus = 50e6\n'
                          "shear_distance = 0.006\nbox_height_d50 = 25\n")
     assert load_campaign(camp).warnings() == []
+
+
+def test_a_soil_cards_fields_count_as_stated():
+    # the card's G (50 MPa) fills every case: no note may say it takes the 29 GPa default
+    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
+    assert "shear_modulus" in camp.stated
+    assert not [w for w in camp.warnings() if "convergence study" in w]
+    assert {c.case.shear_modulus for c in camp.cases} == {50e6}

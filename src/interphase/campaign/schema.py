@@ -279,6 +279,7 @@ def load_campaign(path: str | os.PathLike, *, output: str | os.PathLike | None =
     size = sum(math.prod(len(f) for f in factors) for _, _, factors, _ in gens)
     pairs = data.get("pairs", {})
     stated = set(top_case) | {k for g in groups_spec for k in g[2]} | {v.split(".")[0] for g in groups for v in g.variables}
+    stated |= _card_fields(base_dir, [top_case, *(g[2] for g in groups_spec)])
     lazy = size > EAGER_MAX
     cases, checked = _load_cases(ctx, gens, base_dir, pairs, lazy)
     return Campaign(stated=tuple(sorted(stated)), name=name, path=path.resolve(), engines=engines,
@@ -690,6 +691,22 @@ def _with_soil(ctx: _Ctx, base: dict, base_dir: Path, where: tuple, variables) -
         return merge_soil(base, card, where="")
     except InputError as exc:
         raise ctx.error(where, exc.message, exc.fix) from None
+
+
+def _card_fields(base_dir: Path, tables) -> set[str]:
+    """The Case fields that the soil cards named in `tables` ([case] tables) state: a card states
+    them as surely as the file would (already checked by _with_soil, so a card that fails is skipped)."""
+    from interphase.soil import load_card
+
+    out = set()
+    for table in tables:
+        ref = table.get("soil") if isinstance(table, dict) else None
+        if isinstance(ref, str) and ref:
+            try:
+                out |= set(load_card(Path(ref) if Path(ref).is_absolute() else base_dir / ref).soil)
+            except InputError:
+                pass
+    return out
 
 
 def _check_case_keys(ctx: _Ctx, table: dict, path: tuple) -> None:
