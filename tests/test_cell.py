@@ -203,6 +203,40 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     assert math.isclose(r["relative_density"], 0.5, abs_tol=0.2)
 
 
+@pytest.mark.liggghts
+def test_element_against_a_record_gives_verdicts_and_the_report(density_card, tmp_path):
+    card, _, _ = density_card
+    mine = tmp_path / "tiny.toml"          # the module's card with the sand's index void ratios added
+    mine.write_text(card.read_text() + '\n[target]\ne_min = 0.677\ne_max = 1.054\n')
+    report = tmp_path / "report"
+    cmd = [sys.executable, "-m", "interphase.cli", "element", str(mine), "--record", str(KFS / "TMD17.dat"),
+           "--seeds", "2", "--runs", str(tmp_path / "runs"), "--report", str(report), "--json"]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    assert res.returncode == 0, res.stderr[-2000:]
+    (row,) = json.loads(res.stdout)
+    # TMD17: σ3′ 99.6 kPa → the 100 kPa test; e0 0.7582 → Dr0 (1.054 − 0.7582)/(1.054 − 0.677) = 0.785
+    assert row["record"] == "TMD17" and row["confining_stress"] == 100e3
+    assert row["relative_density"] == pytest.approx(0.785, abs=0.001)
+    assert row["lab_phi"] == pytest.approx(40.39, abs=0.01) and row["n_seeds"] == 2
+    assert {row["phi_peak_deg_verdict"], row["psi_max_deg_verdict"]} <= {"within", "outside", "undecided"}
+    # the specimens were made for that Dr on the tiny grains' own limits at 100 kPa
+    assert math.isclose(row["model_relative_density"], 0.785, abs_tol=0.2)
+    for name in ("verification.csv", "verification.md", "curves.png", "curves.pdf", "angles.png"):
+        assert (report / name).stat().st_size > 0
+    assert "| TMD17 | 100 |" in (report / "verification.md").read_text()
+
+
+def test_element_against_a_record_needs_the_sands_index_void_ratios(tmp_path, capsys):
+    from interphase.cli import main
+
+    card = tmp_path / "bare.toml"
+    card.write_text(CARD.format(name="bare", test="triaxial", n=150, strain=0.03))
+    code = main(["element", str(card), "--record", str(KFS / "TMD17.dat"), "--runs", str(tmp_path / "runs")])
+    err = capsys.readouterr().err
+    assert code == 2 and "[target] e_min, e_max" in err and str(card) in err
+    assert not (tmp_path / "runs").exists()            # refused before any run
+
+
 def test_the_campaigns_grading_is_the_sand_sieve_curve():
     """campaigns/soils/cell_size.toml and the calibration target carry spheres of the Karlsruhe fine sand's
     sieve curve (lab/soils/karlsruhe-fine-sand/README.md) between 5 % and 99.75 % finer: exactly what

@@ -21,6 +21,12 @@ def add_soils(sub, print_json) -> None:
                    help="triaxial/biaxial: confining stress σ3′ [Pa] (repeatable)")
     p.add_argument("--relative-density", type=float, default=None, metavar="DR",
                    help="triaxial/biaxial: relative density, a fraction (default: the card's [cell] relative_density, else its preparation)")
+    p.add_argument("--record", action="append", default=None, metavar="FILE",
+                   help="triaxial/biaxial: a laboratory record (repeatable); the card's test runs at its σ3′ (the "
+                   "nearest 50 kPa) and Dr0 (on the card's [target] e_min, e_max), with verdicts against it")
+    p.add_argument("--report", default=None, metavar="DIR",
+                   help="triaxial/biaxial: write the model-against-laboratory report there (verification.csv/.md, "
+                   "curves, angles)")
     p.add_argument("--seeds", type=int, default=3, help="packing seeds 1…N (default 3)")
     p.add_argument("--shear-velocity", type=float, default=None, metavar="M/S",
                    help="shear speed [m/s] (default: the card's [element] speed, else 0.02: quasi-static)")
@@ -111,8 +117,11 @@ def _cmd_element(args, print_json) -> int:
     card = load_card(args.card)
     _quick_note(card, sys.stderr)
     _check_seeds(args.seeds)
-    if args.test in ("triaxial", "biaxial") or (args.confining_stress and args.test is None):
+    if args.test in ("triaxial", "biaxial") or ((args.confining_stress or args.record) and args.test is None):
         return _cmd_cell(args, print_json)
+    if args.record or args.report:
+        raise InputError("--record and --report are for the laboratory's test", where="--record/--report",
+                         fix="add --test triaxial (3D) or --test biaxial (quasi-2D), or drop them")
     if not args.normal_stress:
         raise InputError("no stress given", where="--normal-stress",
                          fix="direct shear: --normal-stress PA; the laboratory's test: --confining-stress PA")
@@ -160,8 +169,11 @@ def _cmd_cell(args, print_json) -> int:
     from interphase.errors import InputError
     from interphase.soil import load_card
 
+    if args.record:
+        return _cmd_records(args, print_json)
     if not args.confining_stress:
-        raise InputError("no confining stress given", where="--confining-stress", fix="e.g. --confining-stress 100e3")
+        raise InputError("no confining stress given", where="--confining-stress",
+                         fix="e.g. --confining-stress 100e3, or --record FILE to test at a laboratory record's")
     for s in args.confining_stress:
         _positive(s, "--confining-stress", "Pa", "100e3")
     card = load_card(args.card)
@@ -171,6 +183,15 @@ def _cmd_cell(args, print_json) -> int:
     results = run_cell(card, args.confining_stress, range(1, args.seeds + 1), test=args.test,
                        relative_density=args.relative_density, output=runs, executor=args.executor,
                        jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
+    if args.report:
+        from interphase.campaign.cell_records import model_runs, write_report
+
+        test = args.test or card.cell["test"]
+        dr = card.relative_density if args.relative_density is None else args.relative_density
+        pairs = [(f"{r.test}, {r.confining_stress / 1e3:g} kPa, Dr {r.relative_density:.2f}", None,
+                  model_runs(runs, card, test, dr, r.confining_stress)) for r in results]
+        for p in write_report(args.report, [], pairs):
+            print(f"report: {p}", file=stream)
     if args.json:
         rows = [r.to_dict() for r in results]
         print_json(rows[0] if len(rows) == 1 else rows)
@@ -187,6 +208,45 @@ def _cmd_cell(args, print_json) -> int:
         if r.note:
             print(f"  note: {r.note}")
     return 0 if all(r.n_seeds for r in results) else 1
+
+
+def _cmd_records(args, print_json) -> int:
+    """`campaign element CARD --record FILE …`: the card's test at each record's σ3′ and Dr0, verdicts."""
+    from pathlib import Path
+
+    from interphase.campaign.cell_records import check_record, index_void_ratios, markdown, write_report
+    from interphase.campaign.folders import element_runs
+    from interphase.errors import InputError
+    from interphase.soil import load_card
+
+    card = load_card(args.card)
+    if args.confining_stress or args.relative_density is not None:
+        raise InputError("a record sets the test's stress and density itself",
+                         where="--confining-stress/--relative-density", fix="drop them, or drop --record")
+    test = args.test or card.cell["test"]
+    if test != card.cell["test"]:
+        raise InputError(f"the card's cell runs the {card.cell['test']} test, not {test}", where="--test",
+                         fix=f"--test {card.cell['test']}, or a card of the other test")
+    index_void_ratios(card)                 # before any run: a card without them is refused at once
+    stream = sys.stderr if args.json else sys.stdout
+    runs, runs_from = element_runs(card.path, card.name, args.runs)
+    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
+    rows, pairs = [], []
+    for path in args.record:
+        row, pair = check_record(card, Path(path), list(range(1, args.seeds + 1)), runs, executor=args.executor,
+                                 jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
+        rows.append(row)
+        pairs.append(pair)
+    if args.report:
+        for p in write_report(args.report, rows, pairs):
+            print(f"report: {p}", file=stream)
+    if args.json:
+        print_json(rows)
+    else:
+        import pandas as pd
+
+        print(markdown(pd.DataFrame(rows)))
+    return 0 if all(r["n_seeds"] for r in rows) else 1
 
 
 def _cmd_density(args, print_json) -> int:

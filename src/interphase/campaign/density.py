@@ -30,6 +30,9 @@ PREPARATIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
 REFERENCE_STRESS = 10e3        # [Pa]
 TOKEN_STRAIN = 0.002           # [-] the axial compression these runs need only to record their start
 MAP_SEEDS = 2                  # seeds of a void-ratio map at a test's stress (the first of the test's own)
+REFINE = 2                     # points a map at a test's stress may gain where it is read
+E_TOL = 0.003                  # [-] a map point this close to the target e ends the refinement (Dr ~0.01 on
+                               # the Karlsruhe card's span at 200 kPa)
 
 
 def density_runs(card: SoilCard, runs=None):
@@ -65,42 +68,58 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     without a relative density. Why the test's stress and not the index tests' near-zero one: the
     soft grains squeeze (at G = 50 MPa a packing's e falls ~0.07 from 10 to 100 kPa, docs/soils.md),
     a sand's barely; on limits at 10 kPa a dense specimen at 100 kPa read Dr 1.5 and one Dr would mean
-    looser and looser packings as the stress rises."""
+    looser and looser packings as the stress rises.
+
+    The map is refined where it is read: e(preparation) is steep and curved near 0, where every Dr
+    above ~0.55 lies (Karlsruhe card at 200 kPa: e 0.417 at 0, 0.454 at 0.061, 0.474 at 0.117, 0.521
+    at 0.25), so a straight segment between the coarse points picks preparations that pack looser
+    than asked (Dr 0.03-0.05 less, measured). Up to REFINE times, the preparation read off the map is
+    measured itself (the same token runs) and the map read again, until that point's e is within
+    E_TOL of the target."""
     from interphase.errors import InputError
 
     if relative_density is not None and not 0 <= relative_density <= 1:
         raise InputError(f"relative density {relative_density!r} is not a fraction in [0, 1]",
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
-    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], test=test, output=output, executor=executor,
-                             jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    seeds = list(seeds)[:MAP_SEEDS]
+    prep, e = void_ratio_map(card, stress, seeds, **kw)
     limits = (float(e[0]), float(e[-1]))
     if relative_density is None:
         return None, limits
-    if not np.isfinite(e).all():
-        raise InputError(f"the void-ratio map at {stress / 1e3:g} kPa has runs that did not finish", where=str(output),
-                         fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
     target = limits[1] - relative_density * (limits[1] - limits[0])
-    order = np.argsort(e)
-    return round(float(np.interp(target, e[order], np.asarray(prep)[order])), 4), limits
+    for _ in range(REFINE + 1):
+        if not np.isfinite(e).all():
+            raise InputError(f"the void-ratio map at {stress / 1e3:g} kPa has runs that did not finish",
+                             where=str(output),
+                             fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
+        order = np.argsort(e)
+        guess = round(float(np.interp(target, e[order], np.asarray(prep)[order])), 4)
+        if guess in prep and abs(e[prep.index(guess)] - target) <= E_TOL or len(prep) >= len(PREPARATIONS) + REFINE:
+            return guess, limits
+        prep, e = void_ratio_map(card, stress, seeds, preparations=sorted({*prep, guess}), **kw)
+    return guess, limits
 
 
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
-                   stream=None, rerun_failed: bool = False) -> tuple[list, np.ndarray]:
-    """(PREPARATIONS, seed-mean e at the start of a token compression at `stress` for each)."""
+                   stream=None, rerun_failed: bool = False, preparations=PREPARATIONS) -> tuple[list, np.ndarray]:
+    """(preparations, seed-mean e at the start of a token compression at `stress` for each); a
+    preparation's runs have the same id in every map that holds it, so a finer map reruns nothing."""
+    preparations = [float(p) for p in preparations]
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
     name = f"density-{card.name}-{stress / 1e3:g}kPa"
     path = write_campaign(Path(output) / f"{name}.toml", name=name, case=base,
-                          sweep={"preparation": list(PREPARATIONS), "seed": [int(s) for s in seeds]},
+                          sweep={"preparation": preparations, "seed": [int(s) for s in seeds]},
                           description=f"void ratio against preparation of the soil card {card.path}")
     planned, series, _ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed,
                                    columns=CELL_SERIES)
     e = []
-    for prep in PREPARATIONS:
+    for prep in preparations:
         vals = [float(series[p.case_id]["e"].iloc[0]) for p in planned
                 if p.case.preparation == prep and p.case_id in series]
         e.append(float(np.mean(vals)) if vals else float("nan"))
-    return list(PREPARATIONS), np.asarray(e)
+    return preparations, np.asarray(e)
 
 
 def _append(card: SoilCard, table: dict) -> bool:

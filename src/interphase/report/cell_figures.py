@@ -11,8 +11,8 @@ import numpy as np
 
 
 def curves_figure(pairs, path: Path) -> list[Path]:
-    """`pairs` = [(title, record table (eps1, epsv, ratio), [model runs (eps1, epsv, ratio)]), ...]:
-    one column per pair, σ1′/σ3′ on top, εv below (compression positive, so dilation goes down)."""
+    """`pairs` = [(title, record table (eps1, epsv, ratio) or None, [model runs (eps1, epsv, ratio)]),
+    ...]: one column per pair, σ1′/σ3′ on top, εv below (compression positive, so dilation goes down)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -26,8 +26,9 @@ def curves_figure(pairs, path: Path) -> list[Path]:
     fig, ax = plt.subplots(2 * groups, cols, figsize=(2.6 * cols + 0.6, 4.4 * groups), squeeze=False)
     for j, (title, lab, runs) in enumerate(pairs):
         top, bottom = ax[2 * (j // cols), j % cols], ax[2 * (j // cols) + 1, j % cols]
-        top.plot(100 * lab["eps1"], lab["ratio"], color="k", lw=1.2, label="laboratory")
-        bottom.plot(100 * lab["eps1"], 100 * lab["epsv"], color="k", lw=1.2)
+        if lab is not None:
+            top.plot(100 * lab["eps1"], lab["ratio"], color="k", lw=1.2, label="laboratory")
+            bottom.plot(100 * lab["eps1"], 100 * lab["epsv"], color="k", lw=1.2)
         if runs:
             grid, R, V = mean_curves(runs)
             for a, y in ((top, R), (bottom, 100 * V)):
