@@ -1,0 +1,34 @@
+"""Inverting the void-ratio map e(preparation) (campaign/density.py): what a relative density is
+turned into before any engine runs."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from interphase.campaign.density import invert_map
+
+# the Karlsruhe card's map at 200 kPa (2-seed means), with the point seed noise put out of order
+PREP = [0.0, 0.2269, 0.25, 0.5, 0.75, 1.0]
+E = [0.4167, 0.5215, 0.5209, 0.6075, 0.6476, 0.672]
+
+
+def test_a_target_between_two_points_is_bracketed_by_neighbours_in_preparation():
+    # e 0.5112 (Dr 0.63) lies between the points at 0 and 0.2269: the straight line between them,
+    # not one that skips 0.2269 because its e came out 0.0006 above the next point's
+    target = 0.672 - 0.63 * (0.672 - 0.4167)
+    assert invert_map(PREP, E, target) == round(0.2269 * (target - 0.4167) / (0.5215 - 0.4167), 4)
+
+
+def test_the_limits_map_to_the_ends():
+    assert invert_map(PREP, E, 0.4167) == 0.0 and invert_map(PREP, E, 0.672) == 1.0
+    assert invert_map(PREP, E, 0.30) == 0.0 and invert_map(PREP, E, 0.9) == 1.0      # clipped, never outside
+
+
+@given(st.lists(st.floats(0.3, 0.9), min_size=2, max_size=9), st.floats(0.25, 0.95), st.floats(0.25, 0.95))
+def test_denser_targets_never_ask_for_a_looser_preparation(es, t1, t2):
+    prep = np.linspace(0, 1, len(es))
+    lo, hi = sorted((t1, t2))
+    a, b = invert_map(prep, es, lo), invert_map(prep, es, hi)
+    assert 0.0 <= a <= b <= 1.0
