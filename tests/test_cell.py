@@ -252,6 +252,25 @@ def test_the_campaigns_grading_is_the_sand_sieve_curve():
     assert mass_quantile(g, 0.5) == pytest.approx(0.14e-3, rel=0.005)
 
 
+def test_the_ottawa_target_grading_is_its_sieve_curve():
+    """soils/targets/ottawa-f65.toml carries spheres of the committed F-65 sieve curve between its 0.106
+    and 0.425 mm sieves, 5 sizes per interval: their mass median within 1 % of the curve's own (log-d
+    interpolation, 0.2135 mm) and of the printed D50 0.21 mm within 3 %."""
+    import tomllib
+
+    import pandas as pd
+
+    from interphase.material import mass_quantile, sieve_gradation
+
+    curve = pd.read_csv(ROOT / "lab" / "soils" / "ottawa-f65" / "sieve" / "gradation.csv", comment="#")
+    used = curve[(curve.sieve_mm >= 0.106) & (curve.sieve_mm <= 0.425)]
+    g = sieve_gradation(used.sieve_mm.to_numpy() * 1e-3, used.percent_finer.to_numpy(), per_bin=5)
+    soil = tomllib.loads((ROOT / "soils" / "targets" / "ottawa-f65.toml").read_text())["soil"]
+    assert tuple(soil["gradation"]["sizes"]) == g.sizes and tuple(soil["gradation"]["fractions"]) == g.fractions
+    d50 = float(np.exp(np.interp(50, curve.percent_finer, np.log(curve.sieve_mm)))) * 1e-3
+    assert mass_quantile(g, 0.5) == pytest.approx(d50, rel=0.01) == pytest.approx(0.21e-3, rel=0.03)
+
+
 @pytest.mark.liggghts
 def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_checks(tmp_path):
     """`campaign calibrate` on a target that names a laboratory record (campaign/calibrate_cell.py):

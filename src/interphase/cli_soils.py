@@ -184,7 +184,8 @@ def _cmd_cell(args, print_json) -> int:
                        relative_density=args.relative_density, output=runs, executor=args.executor,
                        jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
     if args.report:
-        from interphase.campaign.cell_records import model_runs, write_report
+        from interphase.campaign.cell_records import model_runs
+        from interphase.report.verification import write_report
 
         test = args.test or card.cell["test"]
         dr = card.relative_density if args.relative_density is None else args.relative_density
@@ -214,7 +215,8 @@ def _cmd_records(args, print_json) -> int:
     """`campaign element CARD --record FILE …`: the card's test at each record's σ3′ and Dr0, verdicts."""
     from pathlib import Path
 
-    from interphase.campaign.cell_records import check_record, index_void_ratios, markdown, write_report
+    from interphase.campaign.cell_records import check_record, index_void_ratios
+    from interphase.report.verification import markdown, write_report
     from interphase.campaign.folders import element_runs
     from interphase.errors import InputError
     from interphase.soil import load_card
