@@ -189,8 +189,11 @@ def test_density_measures_the_grains_own_limits_and_never_overwrites_them(densit
 @pytest.mark.liggghts
 def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     card, _, out = density_card
+    # TMD17's σ3′ and Dr0 (e0 0.7582 on e_min 0.677, e_max 1.054), in the folder the record test below
+    # uses: its runs are these (the same ids)
+    dr = (1.054 - 0.7582) / (1.054 - 0.677)
     cmd = [sys.executable, "-m", "interphase.cli", "element", str(card), "--test", "triaxial", "--confining-stress",
-           "100e3", "--relative-density", "0.5", "--seeds", "2", "--runs", str(tmp_path / "runs"), "--json"]
+           "100e3", "--relative-density", repr(dr), "--seeds", "2", "--runs", str(card.parent / "element"), "--json"]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-2000:]
     r = json.loads(res.stdout)
@@ -199,8 +202,8 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     for key in ("phi_peak_deg", "psi_max_deg", "phi_cs_deg"):
         assert r[f"{key}_lo"] <= r[key] <= r[f"{key}_hi"]
     assert r["n_seeds"] == 2 and 0 < r["preparation"] < 1
-    # the specimen was made for Dr 0.5 at 100 kPa: its own e says so within the two seeds' scatter
-    assert math.isclose(r["relative_density"], 0.5, abs_tol=0.2)
+    # the specimen was made for Dr 0.785 at 100 kPa: its own e says so within the two seeds' scatter
+    assert math.isclose(r["relative_density"], dr, abs_tol=0.2)
 
 
 @pytest.mark.liggghts
@@ -210,7 +213,7 @@ def test_element_against_a_record_gives_verdicts_and_the_report(density_card, tm
     mine.write_text(card.read_text() + '\n[target]\ne_min = 0.677\ne_max = 1.054\n')
     report = tmp_path / "report"
     cmd = [sys.executable, "-m", "interphase.cli", "element", str(mine), "--record", str(KFS / "TMD17.dat"),
-           "--seeds", "2", "--runs", str(tmp_path / "runs"), "--report", str(report), "--json"]
+           "--seeds", "2", "--runs", str(card.parent / "element"), "--report", str(report), "--json"]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-2000:]
     (row,) = json.loads(res.stdout)
