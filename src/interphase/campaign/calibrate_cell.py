@@ -44,6 +44,7 @@ import tomli_w
 
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
 from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
+from interphase.campaign import store as st
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields
@@ -233,20 +234,20 @@ def nominal(stress: float) -> float:
 
 def _final(card: SoilCard, target: CellTarget, seeds, runs: Path, executor, jobs, stream, rerun_failed):
     """The laboratory's test on the chosen grains at every record's σ3′ and Dr0 (the fitted one
-    first): ([achieved checks], [verification entries], runs made)."""
+    first): ([achieved checks], [verification entries], finished runs in `runs`)."""
     from interphase.campaign.cell import run_cell
 
-    out, n = [], 0
+    out = []
     for rec in (target.record, *target.verification):
         (r,) = run_cell(card, [nominal(rec.confining_stress)], seeds, relative_density=min(1.0, max(0.0, rec.relative_density)),
                         output=runs, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
-        n += len(seeds) * (1 + 5)          # the tests and the density map's token runs at that stress
         out.append({"record": rec.path.name, "confining_stress": rec.confining_stress, "e0": rec.e0,
                     "relative_density": rec.relative_density, "preparation": r.preparation,
                     "measured": {k: v for k, v in r.to_dict().items() if k.startswith(("phi_", "psi_", "void_", "eps1_"))
                                  or k in ("n_seeds", "relative_density", "dilatancy_end")},
                     "checks": _checks(rec.values, r, rec.relative_density)})
-    return out[0]["checks"], out[1:], n
+    # the tests and the density maps' token runs (5 a stress and the refinement's) that finished
+    return out[0]["checks"], out[1:], sum(1 for _ in Path(runs).rglob(st.DONE)) if Path(runs).is_dir() else 0
 
 
 def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
