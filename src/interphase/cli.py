@@ -41,7 +41,7 @@ def _add_surface(sub) -> None:
     p.add_argument("--axis", default=None, choices=("x", "y"),
                    help="areal scans: the shear axis whose grid lines are the profiles (default x, the file's first "
                    "axis); θa is printed for shear in +x, −x, +y, −y either way")
-    p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
+    p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (default with --soil: the card's)")
     p.add_argument("--filter", type=int, default=92, choices=(92, 90),
                    help="keep trace normals > 92° (default, construction surfaces) or ≥ 90° (regular flat spacing)")
     p.add_argument("--units", default=None, help="units of the file's x and z: um | mm | m "
@@ -498,11 +498,14 @@ def _add_report(sub) -> None:
 
     p = sub.add_parser("predict", help="interface friction from a profile: θa → θr → E → tan δ")
     p.add_argument("profile", help="profile file: Dektak export or two columns x z")
-    p.add_argument("--d50", type=float, required=True, help="median grain diameter [mm]")
+    p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (default with --soil: the card's)")
     p.add_argument("--friction", type=float, required=True, help="particle–surface friction tan φμ [-]")
     p.add_argument("--fit", default=None, help="correlations to use: a campaign file (TOML, fitted on its finished "
                    "cases), a criterion.json written by `campaign report`, or 'study' (approximate readings of the "
                    "study's figures); default: the reproduction's fits shipped with the package (docs/reproduction.md)")
+    p.add_argument("--soil", default=None, metavar="CARD",
+                   help="a soil card (soils/NAME.toml): the criterion fitted on that soil's own interface runs, "
+                   "which the card names in [criterion] fit, with its tan φ and D50")
     p.add_argument("--filter", type=int, default=None, choices=(92, 90),
                    help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
     p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
@@ -585,28 +588,68 @@ def _cmd_report(args) -> int:
     return 0
 
 
+def _soil_fit(args) -> tuple[str, str]:
+    """(criterion file, card path) of `predict --soil CARD`: the fit the card names in [criterion] fit
+    (a criterion.json of `campaign report` on the card's own interface campaign, relative to the card);
+    --d50 defaults to the card's and may not contradict it."""
+    from pathlib import Path
+
+    from interphase.soil import load_card
+
+    if args.fit is not None:
+        raise InputError("--soil names its own fit", where="--fit", fix="give --soil CARD or --fit FILE, not both")
+    card = load_card(args.soil)
+    ref = card.extra.get("criterion", {}).get("fit")
+    if not isinstance(ref, str) or not ref:
+        raise InputError("the card names no criterion fitted on its soil", where=f"{card.path}: [criterion] fit",
+                         fix="run the soil's interface campaign (e.g. campaigns/real_sand/group1_kfs_3d.toml), "
+                             "`campaign report` it, and set [criterion] fit = \"…/criterion.json\" in the card; "
+                             "or predict with --fit")
+    path = Path(ref) if Path(ref).is_absolute() else card.path.parent / ref
+    if not path.exists():
+        raise InputError(f"the card's criterion file {path} does not exist", where=f"{card.path}: [criterion] fit",
+                         fix="the path is relative to the card; `campaign report` writes criterion.json")
+    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
+    if args.d50 is None:
+        args.d50 = d50_mm
+    elif abs(args.d50 - d50_mm) > 0.01 * d50_mm:
+        raise InputError(f"--d50 {args.d50:g} mm is not the card's D50 ({d50_mm:g} mm): its fit is of that soil",
+                         where="--d50", fix="drop --d50 (the card's is used), or predict with --fit for another soil")
+    return str(path), str(card.path)
+
+
 def _cmd_predict(args) -> int:
     import math
 
     from interphase.analysis.criterion import predict_profile
     from interphase.report.build import criterion_model
 
+    fit, soil = args.fit, None
+    if args.soil is not None:
+        fit, soil = _soil_fit(args)
+    elif args.d50 is None:
+        raise InputError("no grain size given", where="--d50", fix="give --d50 MM, or --soil CARD for a card's D50")
     d50 = _d50_m(args.d50)
     if not (math.isfinite(args.friction) and args.friction >= 0):
         raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
     if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
         raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
     prof = _load_measured(args.profile, args.units)
-    model = criterion_model(args.friction, args.fit, args.tan_phi)
+    model = criterion_model(args.friction, fit, args.tan_phi)
     res = predict_profile(model, prof, d50, args.friction, args.filter)
     p, flat_spaced, why = res.prediction, res.flat_spaced, res.flat_spacing_reason
-    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50}
+    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "fit": str(fit) if fit else "reproduction",
+                           "fit_source": model.source, "soil": soil,
+                           "delta_deg": p.delta_deg, "delta_deg_lo": p.delta_interval_deg[0],
+                           "delta_deg_hi": p.delta_interval_deg[1]}
     if args.json:
         _print_json(out)
         return 0
     iv = lambda pair, fmt: "" if not all(map(math.isfinite, pair)) else f"  [{pair[0]:{fmt}}, {pair[1]:{fmt}}]"
     if model.is_default:
         print("*** STUDY DEFAULTS: approximate readings of the study's published figures, not fitted correlations ***")
+    elif soil is not None:
+        print(f"fits: the soil card {soil}'s own, {fit} ({model.source})")
     elif args.fit is None:
         print("fits: the reproduction's (campaigns/study.toml, seed-bootstrap 95 % intervals; docs/reproduction.md)")
     if args.tan_phi is None and not model.is_default:

@@ -33,7 +33,8 @@ ELEMENT_DEFAULTS = {"box_length_d50": 30.0, "box_height_d50": 20.0, "shear_veloc
 #: the laboratory's element test on the periodic cell (`[cell]`, engines/cell.py): its test and protocol
 #: (docs/soils.md: the specimen size converged for φ_peak and ψ_max, the rate quasi-static)
 CELL_DEFAULTS = {"test": "triaxial", "n_grains": 1000, "strain_rate": 10.0, "axial_strain": 0.2}
-CARD_KEYS = ("soil", "element", "cell", "density", "target", "posterior", "achieved", "verification", "calibration")
+CARD_KEYS = ("soil", "element", "cell", "density", "target", "posterior", "achieved", "verification", "calibration",
+             "criterion")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,51 @@
+"""`campaign predict … --soil CARD`: the criterion a soil card names as fitted on its own interface
+runs, with the card's D50; the same numbers as that fit given by hand."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from interphase.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+PROFILE = ROOT / "campaigns" / "profiles" / "dektak-1.csv"
+FIT = ROOT / "src" / "interphase" / "data" / "criterion_reproduction.json"   # a committed fit (any soil's)
+CARD = ROOT / "soils" / "karlsruhe-fine-sand.toml"
+
+
+def _card(tmp_path, extra: str = "") -> Path:
+    card = tmp_path / "sand.toml"
+    card.write_text(CARD.read_text() + extra)
+    return card
+
+
+def _predict(capsys, *args) -> tuple[int, dict | str]:
+    code = main(["predict", str(PROFILE), "--friction", "0.2", *args])
+    out, err = capsys.readouterr()
+    return code, (json.loads(out) if code == 0 and "--json" in args else err)
+
+
+def test_soil_uses_the_fit_its_card_names_and_its_d50(tmp_path, capsys):
+    card = _card(tmp_path, f'\n[criterion]\nfit = "{FIT}"\n')
+    code, out = _predict(capsys, "--soil", str(card), "--json")
+    assert code == 0, out
+    code, same = _predict(capsys, "--fit", str(FIT), "--d50", "0.14", "--json")
+    assert code == 0, same
+    assert out["d50_mm"] == 0.14 and out["soil"] == str(card) and out["fit"] == str(FIT)
+    assert out["fit_source"].startswith(json.loads(FIT.read_text())["source"])
+    for key in ("theta_a_deg", "efficiency", "tan_delta", "delta_deg", "delta_deg_lo", "delta_deg_hi"):
+        assert out[key] == same[key], key
+    assert out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]
+
+
+def test_a_card_without_a_fit_or_a_contradicting_d50_is_refused(tmp_path, capsys):
+    code, err = _predict(capsys, "--soil", str(_card(tmp_path)))
+    assert code == 2 and "[criterion] fit" in err and "sand.toml" in err
+    card = _card(tmp_path, f'\n[criterion]\nfit = "{FIT}"\n')
+    code, err = _predict(capsys, "--soil", str(card), "--d50", "0.7")
+    assert code == 2 and "--d50" in err and "0.14 mm" in err
+    code, err = _predict(capsys, "--soil", str(card), "--fit", str(FIT))
+    assert code == 2 and "not both" in err
+    code, err = _predict(capsys)
+    assert code == 2 and "--d50" in err
