@@ -127,3 +127,12 @@ def test_simulate_runs_each_row_on_the_card_and_resumes(tmp_path):
     pd.testing.assert_frame_equal(again, dem)
     df = with_dem(predict_rows(table, lambda mu: criterion_model(mu, None), card), dem)
     assert df["error_dem_deg"].to_numpy() == pytest.approx((df["delta_dem_deg"] - df["delta_measured_deg"]).to_numpy())
+
+
+def test_the_simulated_protocol_is_the_studys_in_d50_units():
+    from interphase.campaign.validate import PROTOCOL, protocol_for
+
+    assert protocol_for(0.0007) == PROTOCOL                      # the study's 0.7 mm grains: as it was
+    sand = protocol_for(0.00014)                                  # the Karlsruhe fine sand's D50
+    assert sand["shear_distance"] == 0.0012 and sand["snapshot_every"] == 0.0001
+    assert sand["shear_velocity"] == PROTOCOL["shear_velocity"] and sand["box_length_d50"] == 40.0

@@ -4,8 +4,9 @@ through the campaign machinery (a generated campaign file, resumable, local or S
 One group per row: the rebuilt surface (its geometry in D50 units of the laboratory's soil, so the
 card's grains meet teeth of the same relative size), the row's normal stress and particle–surface
 friction, packing seeds 1…N, and the paired soil test of the card's grains at that stress. The
-interface protocol is the campaigns' (PROTOCOL: the 40 × 25 D50 periodic cell at 0.02 m/s over 6 mm,
-docs/convergence.md), not the element test's cell.
+interface protocol is the campaigns' (PROTOCOL: the 40 × 25 D50 periodic cell at 0.02 m/s over 6 mm of
+0.7 mm grains, i.e. 8.6 D50, `protocol_for` the card's D50; docs/convergence.md), not the element
+test's cell.
 """
 
 from __future__ import annotations
@@ -21,6 +22,18 @@ from interphase.errors import InputError
 
 PROTOCOL = {"test": "interface", "device": "periodic", "shear_velocity": 0.02, "shear_distance": 0.006,
             "snapshot_every": 0.0005, "box_length_d50": 40.0, "box_height_d50": 25.0, "friction_pw": 0.9}
+PROTOCOL_D50 = 0.0007      # [m] the grains PROTOCOL's lengths (6 mm of shear, snapshots every 0.5 mm) are for
+
+
+def protocol_for(d50: float) -> dict:
+    """PROTOCOL for grains of median diameter `d50` [m]: the shear and the snapshot spacing in the same
+    D50 units (8.6 D50 and 0.71 D50), the speed as it is (the inertial number depends on the speed and
+    the cell's height in D50, not on D50). A 0.14 mm sand sheared 6 mm would go 43 D50, five times
+    the study's shear and its cost."""
+    k = float(d50) / PROTOCOL_D50
+    # rounded so that the study's own grains keep the study's numbers and a case id does not carry float noise
+    return PROTOCOL | {"shear_distance": round(PROTOCOL["shear_distance"] * k, 12),
+                       "snapshot_every": round(PROTOCOL["snapshot_every"] * k, 12)}
 
 
 def profile_spec(row, d50: float, folder: Path) -> dict:
@@ -55,7 +68,8 @@ def simulate(table, card, seeds, *, output: Path, executor: str | None = None, j
     output = Path(output)
     from interphase.analysis.validation import row_friction
 
-    case = {"soil": str(Path(card.path).resolve()), **(PROTOCOL if protocol is None else protocol)}
+    case = {"soil": str(Path(card.path).resolve()),
+            **(protocol_for(float(card.soil["d50"])) if protocol is None else protocol)}
     groups = []
     for _, r in table.rows.iterrows():
         groups.append({"name": f"row{int(r['row'])}",
