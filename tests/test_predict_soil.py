@@ -49,3 +49,11 @@ def test_a_card_without_a_fit_or_a_contradicting_d50_is_refused(tmp_path, capsys
     assert code == 2 and "not both" in err
     code, err = _predict(capsys)
     assert code == 2 and "--d50" in err
+
+
+def test_simulate_needs_a_card_and_three_seeds(tmp_path, capsys):
+    code, err = _predict(capsys, "--simulate")
+    assert code == 2 and "--soil CARD" in err
+    code, err = _predict(capsys, "--simulate", "--soil", str(_card(tmp_path)), "--seeds", "2",
+                         "--runs", str(tmp_path / "runs"))
+    assert code == 2 and "--seeds" in err and not (tmp_path / "runs").exists()

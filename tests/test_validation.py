@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -136,3 +137,26 @@ def test_the_simulated_protocol_is_the_studys_in_d50_units():
     sand = protocol_for(0.00014)                                  # the Karlsruhe fine sand's D50
     assert sand["shear_distance"] == 0.0012 and sand["snapshot_every"] == 0.0001
     assert sand["shear_velocity"] == PROTOCOL["shear_velocity"] and sand["box_length_d50"] == 40.0
+
+
+@pytest.mark.liggghts
+def test_predict_simulate_runs_a_profile_on_the_card(tmp_path):
+    """`predict --simulate`'s machinery (campaign.validate.simulate_profile) with real LIGGGHTS: a
+    measured-style profile (x, z in m: saw-teeth one D50 high, two D50 apart) on the suite's tiny card
+    in a tiny cell, 3 seeds (the fewest with an interval): δ with its interval, and a second call reruns nothing."""
+    from interphase.campaign.validate import PROTOCOL, simulate_profile
+    from interphase.soil import load_card
+
+    need_binary("liggghts")
+    card = load_card(ROOT / "tests" / "data" / "soils" / "tiny_card.toml")
+    d = float(card.soil["d50"])
+    x = np.linspace(0, 24 * d, 481)
+    z = d * np.abs(((x / (2 * d)) % 1) - 0.5) * 2            # triangle wave: height d, period 2 d
+    tiny = PROTOCOL | {"box_length_d50": 12.0, "box_height_d50": 8.0, "shear_velocity": 0.05, "shear_distance": 0.002}
+    out = simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny)
+    assert out["seeds"] == 3 and out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]
+    assert 5 < out["delta_deg"] < 60 and out["tan_phi"] > 0
+    assert out["E"] == pytest.approx(out["tan_delta"] / out["tan_phi"], rel=0.05)
+    done = sorted((tmp_path / "p").rglob("DONE"))
+    assert simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny) == out
+    assert sorted((tmp_path / "p").rglob("DONE")) == done

@@ -506,6 +506,15 @@ def _add_report(sub) -> None:
     p.add_argument("--soil", default=None, metavar="CARD",
                    help="a soil card (soils/NAME.toml): the criterion fitted on that soil's own interface runs, "
                    "which the card names in [criterion] fit, with its tan φ and D50")
+    p.add_argument("--simulate", action="store_true",
+                   help="with --soil: run the DEM on the profile with the card's grains instead (a generated "
+                   "campaign in --runs, resumable; the campaigns' protocol in the card's D50 units)")
+    p.add_argument("--seeds", type=int, default=3, help="--simulate: packing seeds 1…N (default 3)")
+    p.add_argument("--normal-stress", type=float, default=100e3, metavar="PA",
+                   help="--simulate: normal stress [Pa] (default 100e3)")
+    p.add_argument("--runs", default=None, metavar="DIR",
+                   help="--simulate: runs folder (default runs/predict/<card name> beside the card)")
+    p.add_argument("--jobs", type=int, default=None, help="--simulate: cases at a time (default: one per core)")
     p.add_argument("--filter", type=int, default=None, choices=(92, 90),
                    help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
     p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
@@ -618,6 +627,45 @@ def _soil_fit(args) -> tuple[str, str]:
     return str(path), str(card.path)
 
 
+def _cmd_predict_dem(args) -> int:
+    """`campaign predict PROFILE --friction MU --soil CARD --simulate`: the DEM instead of the fit."""
+    import math
+    from pathlib import Path
+
+    from interphase.campaign.folders import beside, given
+    from interphase.campaign.validate import simulate_profile
+    from interphase.soil import load_card
+
+    if args.soil is None:
+        raise InputError("--simulate runs the DEM with a soil card's grains", where="--simulate",
+                         fix="add --soil CARD (soils/NAME.toml)")
+    if not (math.isfinite(args.friction) and args.friction >= 0):
+        raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
+    if args.seeds < 3:
+        raise InputError(f"must be ≥ 3 (the fewest seeds a peak's interval is given for), got {args.seeds}",
+                         where="--seeds", fix="e.g. --seeds 3")
+    if not (math.isfinite(args.normal_stress) and args.normal_stress > 0):
+        raise InputError(f"must be > 0 Pa, got {args.normal_stress!r}", where="--normal-stress", fix="e.g. 100e3")
+    card = load_card(args.soil)
+    prof = _load_measured(args.profile, args.units)
+    runs, runs_from = (given(args.runs, "--runs") if args.runs else
+                       beside(card.path, f"runs/predict/{card.name}/{Path(args.profile).stem}", "--runs"))
+    stream = sys.stderr if args.json else sys.stdout
+    print(f"predict --simulate: runs folder {runs} ({runs_from})", file=stream, flush=True)
+    out = simulate_profile(card, prof.x, prof.z, args.friction, range(1, args.seeds + 1), output=runs,
+                           normal_stress=args.normal_stress, jobs=args.jobs, stream=stream)
+    out |= {"profile": args.profile, "soil": str(card.path), "friction": args.friction,
+            "normal_stress": args.normal_stress}
+    if args.json:
+        _print_json(out)
+        return 0
+    print(f"DEM on {args.profile} with {card.name} (μs {args.friction:g}, {args.normal_stress / 1e3:g} kPa, "
+          f"{out['seeds']} seeds): tan δ {out['tan_delta']:.3f} [{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
+          f"δ {out['delta_deg']:.2f}° [{out['delta_deg_lo']:.2f}, {out['delta_deg_hi']:.2f}], "
+          f"E {out['E']:.3f} [{out['E_lo']:.3f}, {out['E_hi']:.3f}], tan φ {out['tan_phi']:.3f}")
+    return 0
+
+
 def _cmd_predict(args) -> int:
     import math
 
@@ -625,6 +673,8 @@ def _cmd_predict(args) -> int:
     from interphase.report.build import criterion_model
 
     fit, soil = args.fit, None
+    if args.simulate:
+        return _cmd_predict_dem(args)
     if args.soil is not None:
         fit, soil = _soil_fit(args)
     elif args.d50 is None:

@@ -98,3 +98,39 @@ def with_dem(pred: pd.DataFrame, dem: pd.DataFrame) -> pd.DataFrame:
     df["error_dem_deg"] = df["delta_dem_deg"] - df["delta_measured_deg"]
     return df
 
+
+
+def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
+                     executor: str | None = None, jobs: int | None = None, stream=None, protocol: dict | None = None,
+                     rerun_failed: bool = False) -> dict:
+    """`campaign predict … --soil CARD --simulate`: the DEM on one surface profile (x, z [m], as
+    measured: the teeth keep their physical size against the card's grains) with the card's grains
+    at `normal_stress` [Pa] and particle–surface `friction`, packing seeds `seeds`, with the card's
+    soil test; a generated campaign in `output` (resumable, local or SLURM). Returns tan δ, E and δ
+    at the seed ensemble's peak with their 95 % intervals, tan φ, the seeds and the campaign file."""
+    from interphase.campaign.element import run_cases
+    from interphase.campaign.results import campaign_ensembles
+
+    output = Path(output)
+    prof = output / "profile.csv"
+    output.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame({"x": np.asarray(x, float), "z": np.asarray(z, float)}).to_csv(prof, index=False, header=False)
+    case = {"soil": str(Path(card.path).resolve()),
+            **(protocol_for(float(card.soil["d50"])) if protocol is None else protocol),
+            "profile": {"kind": "file", "path": str(prof.resolve()), "units": "m"},
+            "normal_stress": float(normal_stress), "friction_ps": float(friction)}
+    path = write_campaign(output / "simulate.toml", name="predict", case=case, sweep={"seed": [int(s) for s in seeds]},
+                          executor=executor or "local", description=f"a profile on the soil card {card.path}")
+    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, rerun_failed=rerun_failed)
+    ens = campaign_ensembles(path)
+    ens = ens[ens["test"] == "interface"] if "test" in ens else ens
+    if ens.empty:
+        raise InputError("no interface run finished", where=str(output),
+                         fix="see `campaign status` of the campaign there; --rerun-failed runs failed ones again")
+    r = ens.iloc[0]
+    deg = lambda t: float(np.degrees(np.arctan(float(t))))
+    return {"campaign": str(path), "seeds": int(r["seeds"]), "tan_phi": float(r["tan_phi"]),
+            "tan_delta": float(r["tan_delta"]), "tan_delta_lo": float(r["tan_delta_lo"]),
+            "tan_delta_hi": float(r["tan_delta_hi"]), "E": float(r["E"]), "E_lo": float(r["E_lo"]),
+            "E_hi": float(r["E_hi"]), "delta_deg": deg(r["tan_delta"]), "delta_deg_lo": deg(r["tan_delta_lo"]),
+            "delta_deg_hi": deg(r["tan_delta_hi"])}
