@@ -39,18 +39,13 @@ def model_runs(runs: Path, card, test: str, relative_density, stress: float) -> 
     from interphase.campaign.cell import cell_campaign_file
     from interphase.campaign.element import CELL_SERIES, run_cases
 
+    import io
+
     path = cell_campaign_file(runs, card, test, relative_density)
-    planned, series, _ = run_cases(path, columns=CELL_SERIES, stream=_Null())
+    # every seed has run (run_cell just ran them): this reads them back, its progress lines unwanted
+    planned, series, _ = run_cases(path, columns=CELL_SERIES, stream=io.StringIO())
     return [(s["eps1"].to_numpy(float), s["epsv"].to_numpy(float), s["ratio"].to_numpy(float))
             for p in planned if p.case.normal_stress == stress and (s := series.get(p.case_id)) is not None]
-
-
-class _Null:
-    def write(self, *_):
-        return 0
-
-    def flush(self):
-        pass
 
 
 def check_record(card, path: Path, seeds, runs: Path, **run_kw) -> tuple[dict, tuple]:
