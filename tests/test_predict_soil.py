@@ -57,3 +57,10 @@ def test_simulate_needs_a_card_and_three_seeds(tmp_path, capsys):
     code, err = _predict(capsys, "--simulate", "--soil", str(_card(tmp_path)), "--seeds", "2",
                          "--runs", str(tmp_path / "runs"))
     assert code == 2 and "--seeds" in err and not (tmp_path / "runs").exists()
+
+
+def test_simulate_refuses_what_only_the_criterion_uses(tmp_path, capsys):
+    card = str(_card(tmp_path))
+    for extra in (["--tan-phi", "0.7"], ["--fit", str(FIT)], ["--d50", "0.7"]):
+        code, err = _predict(capsys, "--simulate", "--soil", card, "--runs", str(tmp_path / "runs"), *extra)
+        assert code == 2 and extra[0] in err and not (tmp_path / "runs").exists(), err

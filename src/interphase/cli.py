@@ -646,7 +646,15 @@ def _cmd_predict_dem(args) -> int:
                          where="--seeds", fix="e.g. --seeds 3")
     if not (math.isfinite(args.normal_stress) and args.normal_stress > 0):
         raise InputError(f"must be > 0 Pa, got {args.normal_stress!r}", where="--normal-stress", fix="e.g. 100e3")
+    for flag, value in (("--fit", args.fit), ("--tan-phi", args.tan_phi), ("--filter", args.filter)):
+        if value is not None:
+            raise InputError(f"{flag} is the criterion's; --simulate runs the DEM instead", where=flag,
+                             fix=f"drop {flag}, or drop --simulate")
     card = load_card(args.soil)
+    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
+    if args.d50 is not None and abs(args.d50 - d50_mm) > 0.01 * d50_mm:
+        raise InputError(f"--d50 {args.d50:g} mm is not the card's D50 ({d50_mm:g} mm): the DEM uses the card's grains",
+                         where="--d50", fix="drop --d50")
     prof = _load_measured(args.profile, args.units)
     runs, runs_from = (given(args.runs, "--runs") if args.runs else
                        beside(card.path, f"runs/predict/{card.name}/{Path(args.profile).stem}", "--runs"))
