@@ -193,10 +193,14 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     # uses: its runs are these (the same ids)
     dr = (1.054 - 0.7582) / (1.054 - 0.677)
     cmd = [sys.executable, "-m", "interphase.cli", "element", str(card), "--test", "triaxial", "--confining-stress",
-           "100e3", "--relative-density", repr(dr), "--seeds", "2", "--runs", str(card.parent / "element"), "--json"]
+           "100e3", "--relative-density", repr(dr), "--seeds", "2", "--runs", str(card.parent / "element"),
+           "--report", str(tmp_path / "report"), "--json"]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-2000:]
     r = json.loads(res.stdout)
+    # the report of a run without records: the model's curves alone
+    assert (tmp_path / "report" / "curves.png").stat().st_size > 0
+    assert not (tmp_path / "report" / "verification.csv").exists()
     for key in ("phi_peak_deg", "psi_max_deg", "phi_cs_deg", "void_ratio", "relative_density", "eps1_at_peak"):
         assert key in r
     for key in ("phi_peak_deg", "psi_max_deg", "phi_cs_deg"):
