@@ -618,13 +618,17 @@ def _soil_fit(args) -> tuple[str, str]:
     if not path.exists():
         raise InputError(f"the card's criterion file {path} does not exist", where=f"{card.path}: [criterion] fit",
                          fix="the path is relative to the card; `campaign report` writes criterion.json")
-    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
-    if args.d50 is None:
-        args.d50 = d50_mm
-    elif abs(args.d50 - d50_mm) > 0.01 * d50_mm:
-        raise InputError(f"--d50 {args.d50:g} mm is not the card's D50 ({d50_mm:g} mm): its fit is of that soil",
-                         where="--d50", fix="drop --d50 (the card's is used), or predict with --fit for another soil")
+    args.d50 = _card_d50(card, args.d50, "its fit is of that soil")
     return str(path), str(card.path)
+
+
+def _card_d50(card, given_mm, why: str) -> float:
+    """The card's D50 [mm]; a --d50 more than 1 % off it is refused (`why`: what depends on it)."""
+    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
+    if given_mm is not None and abs(given_mm - d50_mm) > 0.01 * d50_mm:
+        raise InputError(f"--d50 {given_mm:g} mm is not the card's D50 ({d50_mm:g} mm): {why}", where="--d50",
+                         fix="drop --d50 (the card's is used), or give no --soil for another soil")
+    return d50_mm
 
 
 def _cmd_predict_dem(args) -> int:
@@ -651,10 +655,7 @@ def _cmd_predict_dem(args) -> int:
             raise InputError(f"{flag} is the criterion's; --simulate runs the DEM instead", where=flag,
                              fix=f"drop {flag}, or drop --simulate")
     card = load_card(args.soil)
-    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
-    if args.d50 is not None and abs(args.d50 - d50_mm) > 0.01 * d50_mm:
-        raise InputError(f"--d50 {args.d50:g} mm is not the card's D50 ({d50_mm:g} mm): the DEM uses the card's grains",
-                         where="--d50", fix="drop --d50")
+    _card_d50(card, args.d50, "the DEM uses the card's grains")
     prof = _load_measured(args.profile, args.units)
     runs, runs_from = (given(args.runs, "--runs") if args.runs else
                        beside(card.path, f"runs/predict/{card.name}/{Path(args.profile).stem}", "--runs"))

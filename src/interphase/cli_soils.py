@@ -189,8 +189,9 @@ def _cmd_cell(args, print_json) -> int:
 
         test = args.test or card.cell["test"]
         dr = card.relative_density if args.relative_density is None else args.relative_density
+        curves = model_runs(runs, card, test, dr)
         pairs = [(f"{r.test}, {r.confining_stress / 1e3:g} kPa, Dr {r.relative_density:.2f}", None,
-                  model_runs(runs, card, test, dr, r.confining_stress)) for r in results]
+                  curves[r.confining_stress]) for r in results]
         for p in write_report(args.report, [], pairs):
             print(f"report: {p}", file=stream)
     if args.json:
@@ -216,8 +217,8 @@ def _cmd_records(args, print_json) -> int:
     from pathlib import Path
 
     from interphase.campaign.cell_records import check_record, index_void_ratios
-    from interphase.report.verification import markdown, write_report
     from interphase.campaign.folders import element_runs
+    from interphase.report.verification import markdown, write_report
     from interphase.errors import InputError
     from interphase.soil import load_card
 

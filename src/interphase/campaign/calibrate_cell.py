@@ -42,9 +42,9 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
 from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
-from interphase.campaign import store as st
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields

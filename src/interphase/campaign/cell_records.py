@@ -4,18 +4,18 @@ and relative density Dr0, the verdicts, and the report a reviewer asks for (docs
 
 Dr0 of a record is (e_max − e0)/(e_max − e_min) on the sand's own index void ratios, read from the
 card's [target] (a card written by `campaign calibrate` carries them). Verdicts: within when the
-model's 95 % seed interval lies inside the record's value ± TOLERANCES (φ_peak 1.5°, ψ_max 2°),
-outside when it lies wholly beyond, else undecided.
+model's 95 % seed interval lies inside the record's value ± the calibration's TOLERANCES (φ_peak
+1.5°, ψ_max 2°), outside when it lies wholly beyond, else undecided.
 
 The report of the rows: report/verification.py."""
 
 from __future__ import annotations
 
+import io
+from collections import defaultdict
 from pathlib import Path
 
 from interphase.errors import InputError
-
-TOLERANCES = {"phi_peak_deg": 1.5, "psi_max_deg": 2.0}
 
 
 def index_void_ratios(card) -> tuple[float, float]:
@@ -34,25 +34,28 @@ def index_void_ratios(card) -> tuple[float, float]:
     return e_lim
 
 
-def model_runs(runs: Path, card, test: str, relative_density, stress: float) -> list[tuple]:
-    """[(ε1, εv, R), …] of the finished seeds of one element test run by `run_cell` in `runs`."""
+def model_runs(runs: Path, card, test: str, relative_density) -> dict[float, list[tuple]]:
+    """{σ3′ [Pa]: [(ε1, εv, R), …]} of the finished seeds of the element tests `run_cell` ran in
+    `runs` at `relative_density` (one read of its campaign for every stress)."""
     from interphase.campaign.cell import cell_campaign_file
     from interphase.campaign.element import CELL_SERIES, run_cases
-
-    import io
 
     path = cell_campaign_file(runs, card, test, relative_density)
     # every seed has run (run_cell just ran them): this reads them back, its progress lines unwanted
     planned, series, _ = run_cases(path, columns=CELL_SERIES, stream=io.StringIO())
-    return [(s["eps1"].to_numpy(float), s["epsv"].to_numpy(float), s["ratio"].to_numpy(float))
-            for p in planned if p.case.normal_stress == stress and (s := series.get(p.case_id)) is not None]
+    out = defaultdict(list)
+    for p in planned:
+        if (s := series.get(p.case_id)) is not None:
+            out[p.case.normal_stress].append((s["eps1"].to_numpy(float), s["epsv"].to_numpy(float),
+                                              s["ratio"].to_numpy(float)))
+    return out
 
 
 def check_record(card, path: Path, seeds, runs: Path, **run_kw) -> tuple[dict, tuple]:
     """(row, (title, record table, model runs)) of one record: the card's test at the record's σ3′
     and Dr0 (resumable: finished seeds are read, not rerun)."""
     from interphase.analysis.triaxial import shear_state
-    from interphase.campaign.calibrate import verdict
+    from interphase.campaign.calibrate import TOLERANCES, verdict
     from interphase.campaign.calibrate_cell import nominal
     from interphase.campaign.cell import run_cell
     from interphase.io.lab_triaxial import read_triaxial
@@ -74,4 +77,4 @@ def check_record(card, path: Path, seeds, runs: Path, **run_kw) -> tuple[dict, t
     for q, lq in (("phi_peak_deg", "lab_phi"), ("psi_max_deg", "lab_psi")):
         row[q + "_verdict"] = verdict(row[lq], row[q + "_lo"], row[q + "_hi"], TOLERANCES[q])
     title = f"{Path(path).stem}: {sigma / 1e3:g} kPa, Dr {dr:.2f}"
-    return row, (title, t, model_runs(runs, card, test, asked, sigma))
+    return row, (title, t, model_runs(runs, card, test, asked)[sigma])

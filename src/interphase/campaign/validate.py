@@ -99,7 +99,6 @@ def with_dem(pred: pd.DataFrame, dem: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
-
 def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
                      executor: str | None = None, jobs: int | None = None, stream=None, protocol: dict | None = None,
                      rerun_failed: bool = False) -> dict:
