@@ -8,7 +8,8 @@ Per run (the campaign's finished runs, or the committed copy in --save) and per 
 code (analysis.triaxial.shear_state): φ_peak, ψ_max, e0, the end state, and Rowe's friction part at
 the peak, φ_f = asin((K − 1)/(K + 1)) with K = R_peak / (1 + r_peak) (triaxial compression,
 σ1′/σ3′ = K (1 − dεv/dε1)), r_peak the dilatancy rate −dεv/dε1 of a straight line over ε1 within
-±ROWE_HALF of the peak. The comparison in the (ψ_max, φ_peak) plane: a least-squares line through the
+±ROWE_HALF of the peak, and ψ at the peak from r_peak (the ψ_max formula); ε1 at ψ_max is the centre of
+its window. The comparison in the (ψ_max, φ_peak) plane: a least-squares line through the
 model's runs, and each record's φ_peak minus that line at the record's ψ_max (mean over the records,
 Student-t 95 % interval). Rowe's relation is read as stress-independent, so records at 50–400 kPa are
 set beside model runs at 200 kPa; the table says each record's stress.
@@ -28,33 +29,39 @@ from scipy import stats
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from cell_study import from_runs  # noqa: E402
 
-from interphase.analysis.triaxial import shear_state  # noqa: E402
+from interphase.analysis.triaxial import psi_from_rate, shear_state  # noqa: E402
 from interphase.io.lab_triaxial import read_triaxial  # noqa: E402
 
 ROWE_HALF = 0.005      # the rate at the peak: ε1 within ±0.5 % of it
 
 
-def rowe_friction_deg(eps1, epsv, ratio, eps1_peak: float, ratio_peak: float) -> float:
-    """Rowe's friction part at the peak [°] (module docstring); NaN when the window holds < 3 samples."""
+def rate_at(eps1, epsv, at: float) -> float:
+    """−dεv/dε1 of a straight line over ε1 within ±ROWE_HALF of `at`; NaN with < 3 samples there."""
     x, v = np.asarray(eps1, float), np.asarray(epsv, float)
-    sel = np.abs(x - eps1_peak) <= ROWE_HALF
-    if sel.sum() < 3:
-        return math.nan
-    rate = -float(np.polyfit(x[sel], v[sel], 1)[0])
-    K = ratio_peak / (1 + rate)
+    sel = np.abs(x - at) <= ROWE_HALF
+    return -float(np.polyfit(x[sel], v[sel], 1)[0]) if sel.sum() >= 3 else math.nan
+
+
+def rowe_friction_deg(ratio_peak: float, rate_peak: float) -> float:
+    """Rowe's friction part at the peak [°] (module docstring)."""
+    K = ratio_peak / (1 + rate_peak)
     return math.degrees(math.asin((K - 1) / (K + 1)))
 
 
 def state_row(eps1, epsv, ratio, e) -> dict:
     s = shear_state(eps1, epsv, ratio, e)
+    r_peak = rate_at(eps1, epsv, s.eps1_peak)
     return dict(phi_peak_deg=s.phi_peak_deg, eps1_peak=s.eps1_peak, psi_max_deg=s.psi_max_deg,
+                eps1_psi=s.eps1_psi + s.window / 2, rate_max=s.dilatancy_max, rate_peak=r_peak,
+                psi_peak_deg=float(psi_from_rate(r_peak)),
                 phi_end_deg=s.phi_end_deg, e0=float(np.asarray(e, float)[0]), e_end=s.e_end,
                 dilatancy_end=s.dilatancy_end, eps1_last=s.eps1_last,
-                phi_f_deg=rowe_friction_deg(eps1, epsv, ratio, s.eps1_peak, s.ratio_peak))
+                phi_f_deg=rowe_friction_deg(s.ratio_peak, r_peak))
 
 
 def model_rows(summ: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
     rows = []
+    summ = summ.assign(preparation=summ["preparation"].fillna(1.0))    # 1 (the grains' own friction) is stored as unset
     for _, r in summ.iterrows():
         c = curves[curves["case_id"] == r["case_id"]]
         rows.append({"source": "model", "name": f"prep {r['preparation']:g} s{int(r['seed'])}",
@@ -73,19 +80,21 @@ def record_rows(folder: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def offset(model: pd.DataFrame, sand: pd.DataFrame) -> dict:
-    """The sand's φ_peak minus the model's line at the sand's ψ_max: mean and 95 % interval."""
-    fit = stats.linregress(model["psi_max_deg"], model["phi_peak_deg"])
-    d = sand["phi_peak_deg"] - (fit.intercept + fit.slope * sand["psi_max_deg"])
+def offset(model: pd.DataFrame, sand: pd.DataFrame, x: str = "psi_max_deg") -> dict:
+    """The sand's φ_peak minus the model's line φ_peak(x) at the sand's own x (ψ_max, or ψ at the
+    peak): mean and 95 % interval."""
+    fit = stats.linregress(model[x], model["phi_peak_deg"])
+    d = sand["phi_peak_deg"] - (fit.intercept + fit.slope * sand[x])
     n = len(d)
     h = stats.t.ppf(0.975, n - 1) * d.std(ddof=1) / math.sqrt(n)
     return dict(slope=fit.slope, intercept=fit.intercept, r2=fit.rvalue ** 2, n_model=len(model), n_sand=n,
                 offset=float(d.mean()), lo=float(d.mean() - h), hi=float(d.mean() + h),
-                psi_model=(float(model["psi_max_deg"].min()), float(model["psi_max_deg"].max())))
+                x=x, x_model=(float(model[x].min()), float(model[x].max())))
 
 
 def by_preparation(model: pd.DataFrame) -> pd.DataFrame:
-    cols = ["e0", "phi_peak_deg", "eps1_peak", "psi_max_deg", "phi_f_deg", "phi_end_deg", "e_end", "dilatancy_end"]
+    cols = ["e0", "phi_peak_deg", "eps1_peak", "psi_max_deg", "eps1_psi", "rate_peak", "psi_peak_deg", "rate_max",
+            "phi_f_deg", "phi_end_deg", "e_end", "dilatancy_end"]
     g = model.groupby("preparation")
     out = g[cols].mean()
     out["n"] = g.size()
@@ -94,27 +103,42 @@ def by_preparation(model: pd.DataFrame) -> pd.DataFrame:
     return out.reset_index()
 
 
-def figure(model: pd.DataFrame, sand: pd.DataFrame, off: dict, path: Path) -> None:
+def figure(model: pd.DataFrame, sand: pd.DataFrame, curves: pd.DataFrame, summ: pd.DataFrame, records: Path,
+           path: Path) -> None:
+    """φ_peak against ψ_max and against ψ at the peak (model runs coloured by preparation, records by
+    stress, each with the model's line), and the curves of the model's preparation 0.2 beside TMD18."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 2, figsize=(10, 4.2))
-    sc = ax[0].scatter(model["psi_max_deg"], model["phi_peak_deg"], c=model["preparation"], cmap="viridis",
-                       marker="o", label="spheres, 200 kPa (colour: preparation)")
-    fig.colorbar(sc, ax=ax[0], label="preparation")
-    for s3, m in zip((50, 100, 200, 300, 400), "v<s>^"):
-        sel = (sand["sigma3_kPa"] - s3).abs() < 25
-        ax[0].scatter(sand.loc[sel, "psi_max_deg"], sand.loc[sel, "phi_peak_deg"], marker=m, color="k",
-                      facecolors="none", label=f"sand {s3} kPa")
-    xs = np.linspace(0, max(model["psi_max_deg"].max(), sand["psi_max_deg"].max()) + 1, 20)
-    ax[0].plot(xs, off["intercept"] + off["slope"] * xs, color="C0", lw=1)
-    ax[0].set(xlabel="ψ_max [°]", ylabel="φ_peak [°]", title="strength against dilatancy")
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.3))
+    for a, x, name in ((ax[0], "psi_max_deg", "ψ_max"), (ax[1], "psi_peak_deg", "ψ at the peak")):
+        sc = a.scatter(model[x], model["phi_peak_deg"], c=model["preparation"], cmap="viridis", vmin=0, vmax=1,
+                       label="spheres, 200 kPa")
+        for s3, m in zip((50, 100, 200, 300, 400), "v<s>^"):
+            sel = (sand["sigma3_kPa"] - s3).abs() < 25
+            a.scatter(sand.loc[sel, x], sand.loc[sel, "phi_peak_deg"], marker=m, color="k", facecolors="none",
+                      label=f"sand {s3} kPa")
+        o = offset(model, sand, x)
+        xs = np.linspace(0, 25, 20)
+        a.plot(xs, o["intercept"] + o["slope"] * xs, color="C0", lw=1)
+        a.set(xlabel=f"{name} [°]", ylabel="φ_peak [°]",
+              title=f"sand − spheres' line: {o['offset']:+.1f}° ({o['lo']:+.1f} to {o['hi']:+.1f})")
     ax[0].legend(fontsize=7)
-    ax[1].scatter(model["psi_max_deg"], model["phi_f_deg"], c=model["preparation"], cmap="viridis")
-    ax[1].scatter(sand["psi_max_deg"], sand["phi_f_deg"], marker="s", color="k", facecolors="none", label="sand")
-    ax[1].set(xlabel="ψ_max [°]", ylabel="Rowe's φ_f at the peak [°]", title="the friction part")
-    ax[1].legend(fontsize=7)
+    fig.colorbar(sc, ax=ax[1], label="preparation")
+    b = ax[2]
+    b2 = b.twinx()
+    ids = summ.loc[summ["preparation"].fillna(1.0) == 0.2, "case_id"]
+    for cid in ids:
+        c = curves[curves["case_id"] == cid]
+        b.plot(c["eps1"] * 100, np.degrees(np.arcsin((c["ratio"] - 1) / (c["ratio"] + 1))), color="C0", lw=1)
+        b2.plot(c["eps1"] * 100, c["epsv"] * 100, color="C0", lw=1, ls="--")
+    t = read_triaxial(records / "TMD18.dat").table
+    b.plot(t["eps1"] * 100, np.degrees(np.arcsin((t["ratio"] - 1) / (t["ratio"] + 1))), color="k", lw=1.5)
+    b2.plot(t["eps1"] * 100, t["epsv"] * 100, color="k", lw=1.5, ls="--")
+    b.axhline(33.1, color="grey", lw=0.8, ls=":")
+    b.set(xlabel="ε1 [%]", ylabel="mobilised φ [°] (solid)", title="spheres, prep 0.2 (blue) and TMD18 (black)")
+    b2.set_ylabel("εv [%] (dashed; compression +)")
     fig.tight_layout()
     fig.savefig(path, dpi=130)
 
@@ -140,12 +164,13 @@ def main(argv=None) -> None:
     prep = by_preparation(model)
     pd.set_option("display.width", 200)
     print(prep.round(3).to_string(index=False))
-    print(sand[["name", "sigma3_kPa", "e0", "phi_peak_deg", "eps1_peak", "psi_max_deg", "phi_f_deg", "phi_end_deg",
-                "e_end", "dilatancy_end"]].round(3).to_string(index=False))
-    print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in off.items()})
+    print(sand[["name", "sigma3_kPa", "e0", "phi_peak_deg", "eps1_peak", "psi_max_deg", "eps1_psi", "rate_peak",
+                "psi_peak_deg", "phi_f_deg", "phi_end_deg", "e_end", "dilatancy_end"]].round(3).to_string(index=False))
+    for o in (off, offset(model, sand, "psi_peak_deg")):
+        print({k: (round(float(v), 3) if isinstance(v, (float, np.floating)) else v) for k, v in o.items()})
     if a.save:
         pd.concat([model, sand], ignore_index=True).to_csv(a.save / "state_line.csv", index=False, float_format="%.5g")
-        figure(model, sand, off, a.save / "state_line.png")
+        figure(model, sand, got[1], got[0], a.records, a.save / "state_line.png")
 
 
 if __name__ == "__main__":
