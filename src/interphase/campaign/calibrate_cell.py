@@ -20,7 +20,7 @@ in the cell (engines/cell.py), by the same GrainLearning filter as the direct-sh
 
 Observations of a sample (its seeds together, analysis.cell_ensemble): φ_peak and ψ_max against the
 record's own (analysis.triaxial on the record: the same code), φ at the end against phi_cs_deg when
-given, and the relative density of its specimen at the record's σ3′ against the record's Dr0. The
+given (judged only where the model's volume has stopped changing: `_checks`), and the relative density of its specimen at the record's σ3′ against the record's Dr0. The
 model's Dr needs its own e_min (the frictionless preparation: the same for every sample, measured
 once) and e_max (the loosest packing at the sample's own friction: one token consolidation per
 sample), both at the record's stress, as every relative density of the model is (campaign/density.py,
@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from interphase.analysis.cell_ensemble import CRITICAL_RATE
 from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
 from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
@@ -50,6 +51,7 @@ from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields
 
 QUANTITIES = ("phi_peak_deg", "psi_max_deg", "phi_cs_deg", "relative_density")
+NOT_CRITICAL = "not a critical state"
 TOLERANCES = {**ANGLE_TOLERANCES, "relative_density": 0.05}     # [°], and Dr [-]
 FREE_FIELDS = ("friction_pp", "rolling_friction", "preparation")
 BUDGET = {"samples": 12, "iterations": 3, "seeds": 2, "final_seeds": 3, "ess_target": 0.3, "components": 2}
@@ -219,10 +221,18 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
 
 
 def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
-    """calibrate.compare's verdicts on the angles, and the specimens' relative density beside them."""
-    return compare(lab, r) + [{"quantity": "relative_density", "laboratory": dr_lab, "measured": r.relative_density,
-                               "difference": r.relative_density - dr_lab,
-                               "tolerance": TOLERANCES["relative_density"]}]
+    """calibrate.compare's verdicts on the angles, and the specimens' relative density beside them.
+    φ_cs is judged only where the model has reached a critical state (|−dεv/dε1| at the end within
+    CRITICAL_RATE); else its verdict says so and the note says how to get there."""
+    checks = compare(lab, r)
+    for c in checks:
+        if c["quantity"] == "phi_cs_deg" and not abs(r.dilatancy_end) <= CRITICAL_RATE:
+            c["verdict"] = NOT_CRITICAL
+            c["note"] = (f"the model's volume still changes at ε1 = {r.eps1_end:.0%} (−dεv/dε1 = {r.dilatancy_end:.2f}): "
+                         "its end angle is no critical state; run the cell further ([cell] axial_strain: the "
+                         "Karlsruhe card's spheres need 0.35–0.4, docs/soils.md)")
+    return checks + [{"quantity": "relative_density", "laboratory": dr_lab, "measured": r.relative_density,
+                      "difference": r.relative_density - dr_lab, "tolerance": TOLERANCES["relative_density"]}]
 
 
 def nominal(stress: float) -> float:
