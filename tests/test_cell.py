@@ -142,6 +142,23 @@ def test_two_seeds_far_apart_give_an_interval_that_ends_at_minus_90_degrees_not_
     assert r.psi_max_deg_lo == pytest.approx(-90.0) and np.isfinite(r.psi_max_deg_hi)
 
 
+def test_a_calibration_judges_phi_cs_only_where_the_model_reached_a_critical_state():
+    from interphase.campaign.calibrate_cell import NOT_CRITICAL, _checks
+
+    x = np.linspace(0, 0.4, 801)
+    R = 1 + 3 * x / 0.1 * np.exp(1 - x / 0.1) + 1.2 * (1 - np.exp(-x / 0.1))   # a peak, then a plateau near 2.2
+    v = -0.1 * (1 - np.exp(-np.clip(x - 0.05, 0, None) / 0.06))               # dilation dies out by 40 %
+    runs = [(x, v + 1e-4 * k, R * (1 + 0.002 * k)) for k in range(3)]
+    lab = {"phi_peak_deg": 40.0, "psi_max_deg": 15.0, "phi_cs_deg": 22.0}
+    at_40 = cell_result("triaxial", 200e3, runs, [0.5] * 3)
+    at_20 = cell_result("triaxial", 200e3, [(a[x <= 0.2], b[x <= 0.2], c[x <= 0.2]) for a, b, c in runs], [0.5] * 3)
+    assert abs(at_40.dilatancy_end) <= 0.05 < at_20.dilatancy_end          # the curves do what the test needs
+    cs = lambda r: next(c for c in _checks(lab, r, 0.5) if c["quantity"] == "phi_cs_deg")   # noqa: E731
+    assert cs(at_20)["verdict"] == NOT_CRITICAL and "axial_strain" in cs(at_20)["note"]
+    assert cs(at_40)["verdict"] != NOT_CRITICAL and "note" not in cs(at_40)
+    assert {c["quantity"] for c in _checks(lab, at_20, 0.5)} == {*lab, "relative_density"}
+
+
 # ---- real LIGGGHTS ---------------------------------------------------------------------------------
 @pytest.mark.liggghts
 @pytest.mark.parametrize("test", ["triaxial", "biaxial"])
@@ -281,10 +298,14 @@ def test_the_ottawa_target_grading_is_its_sieve_curve():
 @pytest.mark.liggghts
 def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_checks(tmp_path):
     """`campaign calibrate` on a target that names a laboratory record (campaign/calibrate_cell.py):
-    the quickest budget on 100 grains to 2 % of axial strain — a run of the machinery, not a soil."""
+    the quickest budget on 100 grains to 2 % of axial strain — a run of the machinery, not a soil: the
+    sand's target with the narrow grading of this file's cells (GRAINS, d50 0.14 mm as the sand's) for
+    its 12-size sieve curve, whose smallest grains (0.083 mm) set a time step ~1.4× shorter."""
     need_binary("liggghts")
     text = (ROOT / "soils" / "targets" / "karlsruhe-fine-sand.toml").read_text()
     text = text.replace("../../lab/", f"{ROOT}/lab/").split("[[verification]]")[0]
+    sieve = next(ln for ln in text.splitlines() if ln.startswith("gradation = {sizes = [8.263e-05"))
+    text = text.replace(sieve, f"gradation = {{sizes = {list(GRAINS.sizes)}, fractions = {list(GRAINS.fractions)}}}")
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
     text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.2", "axial_strain = 0.02")
     text += "\n[budget.quick]\nsamples = 2\n"

@@ -166,14 +166,20 @@ def test_cli_report_without_results_exit_2(tmp_path, capsys):
     assert code == 2 and "campaign run" in err and "Traceback" not in err
 
 
-@pytest.mark.liggghts
-def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
-    """The quick campaign run for real (LIGGGHTS, 6 tiny cases; conftest.quick_campaign), reported."""
-    capsys.readouterr()
-    out = tmp_path / "report"
+@pytest.fixture(scope="module")
+def quick_report(quick_campaign, tmp_path_factory):
+    """`campaign report` of the real quick campaign (LIGGGHTS, 6 tiny cases; conftest.quick_campaign)
+    with the laboratory table: built once (~11 s of CPU) for the two tests below that read it."""
+    out = tmp_path_factory.mktemp("quick-report") / "report"
     code = main(["report", str(quick_campaign), "--out", str(out), "--lab", str(LAB), "--bootstrap", "20"])
-    assert code == 0, capsys.readouterr().err
-    tmp_path = out
+    assert code == 0
+    return out
+
+
+@pytest.mark.liggghts
+def test_real_quick_campaign_report(quick_report):
+    """The quick campaign run for real (LIGGGHTS, 6 tiny cases; conftest.quick_campaign), reported."""
+    tmp_path = quick_report
     check_outputs(tmp_path, ["quick"], lab=True)
     assert list((tmp_path / "figures").glob("curves_*.png"))
     assert list((tmp_path / "figures").glob("network_*.png"))
@@ -188,11 +194,8 @@ def test_real_quick_campaign_report(tmp_path, capsys, quick_campaign):
 
 
 @pytest.mark.liggghts
-def test_report_writes_every_run_as_one_small_summaries_file(quick_campaign, tmp_path):
-    from interphase.report.build import build_report
-
-    res = build_report(quick_campaign, out=tmp_path / "rep", n_boot=9)
-    s = pd.read_csv(res.folder / "tables" / "summaries.csv")
+def test_report_writes_every_run_as_one_small_summaries_file(quick_report):
+    s = pd.read_csv(quick_report / "tables" / "summaries.csv")
     assert len(s) == 6 and list(s.columns[:5]) == ["case_id", "label", "physical_id", "group", "test"]
     # a physical case's seeds share its id, and only they do
     name = s["label"].str.replace(r"-s\d+$", "", regex=True)
