@@ -64,6 +64,20 @@ def _wait_for(cond, timeout: float, what: str):
     pytest.fail(f"timed out waiting for {what}")
 
 
+def _group_ends(pgid: int, timeout: float = 60) -> None:
+    """Wait until no process is left in the campaign's process group (its workers, and engines started
+    in it): after that no late worker can start a case, however loaded the machine, so a check made
+    then does not depend on how long one sleeps."""
+    def gone() -> bool:
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return True
+        return False
+
+    _wait_for(gone, timeout, f"every process of the campaign's group {pgid} to end")
+
+
 def _no_engine_left(out: Path, grace: float = 0.0) -> None:
     # an engine signalled as the campaign exits may take a moment to be reaped on a loaded machine
     # (seen once with 4 other engines on the 2 cores); one still alive after `grace` s was left running
@@ -154,7 +168,7 @@ def test_sigterm_to_the_campaign_alone_starts_no_case_after_it(campaign):
     proc.send_signal(signal.SIGTERM)
     text, _ = proc.communicate(timeout=120)
     assert proc.returncode != 0 and "interrupted" in text, text
-    time.sleep(3)                                     # a late starter would have an engine up by now
+    _group_ends(proc.pid)                             # no worker left that could start a case late
     _no_engine_left(out)
     # nothing ran to its end after the signal: the running case and the queued one are interrupted
     assert sum((f / "DONE").exists() for f in _folders(out)) == done_before, text

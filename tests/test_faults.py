@@ -28,7 +28,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from conftest import need_binary  # noqa: E402
 from campaign_files import write_toml  # noqa: E402
-from test_campaign_run import TABLES, _folders, _no_engine_left, _starts, _wait_for  # noqa: E402
+from test_campaign_run import TABLES, _folders, _group_ends, _no_engine_left, _starts, _wait_for  # noqa: E402
 
 from interphase.campaign.run import campaign_status  # noqa: E402
 from interphase.campaign.runner import stale_engine_pids  # noqa: E402
@@ -143,7 +143,7 @@ def test_sigkill_of_the_campaign_process_alone_stops_its_worker(tmp_path):
     (running,) = [f for f in _folders(out) if f != done]
     worker = _worker_pid(running)
     _wait_for(lambda: not _alive(worker), 20, f"worker {worker} to end after its campaign process died")
-    time.sleep(2)                                         # a worker taking the next case would start now
+    _group_ends(proc.pid)                                 # no process left that could take the next case
     _no_engine_left(out)
     assert len(_folders(out)) == 2, "a case was started after the campaign process died"
     fail = _failure(running)
