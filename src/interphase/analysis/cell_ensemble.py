@@ -114,8 +114,8 @@ def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limi
     dr = (e_max - e.mean()) / (e_max - e_min) if np.isfinite([e_min, e_max]).all() else math.nan
     notes = [] if n >= 2 else ["one seed: no intervals (run ≥ 3 seeds)"]
     if abs(state.dilatancy_end) > CRITICAL_RATE:
-        notes.append(f"still dilating at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is the end "
-                     "state's angle, not yet a critical state")
+        notes.append(f"the volume still changes at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is "
+                     "the end state's angle, not yet a critical state")
     return CellResult(
         test, confining_stress, n, float(friction_angle(np.mean(seed_peak))), *_interval(seed_peak, friction_angle, 0.0),
         state.eps1_peak,

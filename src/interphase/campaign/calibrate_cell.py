@@ -20,10 +20,11 @@ in the cell (engines/cell.py), by the same GrainLearning filter as the direct-sh
 
 Observations of a sample (its seeds together, analysis.cell_ensemble): φ_peak and ψ_max against the
 record's own (analysis.triaxial on the record: the same code), φ at the end against phi_cs_deg when
-given (judged only where the model's volume has stopped changing: `_checks`), and the relative density of its specimen at the record's σ3′ against the record's Dr0. The
-model's Dr needs its own e_min (the frictionless preparation: the same for every sample, measured
-once) and e_max (the loosest packing at the sample's own friction: one token consolidation per
-sample), both at the record's stress, as every relative density of the model is (campaign/density.py,
+given (judged only where the model's volume has stopped changing: `_checks`), and the relative
+density of its specimen at the record's σ3′ against the record's Dr0. The model's Dr needs its own
+e_min (the frictionless preparation: the same for every sample, measured once) and e_max (the
+loosest packing at the sample's own friction: one token consolidation per sample), both at the
+record's stress, as every relative density of the model is (campaign/density.py,
 `preparation_at`). Likelihood spreads ∝ TOLERANCES.
 
 After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains),
