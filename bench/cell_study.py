@@ -74,7 +74,8 @@ def markdown(df: pd.DataFrame, by: list[str]) -> str:
     head = "| " + " | ".join(by) + " | seeds | φ_peak [°] | ε1 at peak [%] | ψ_max [°] | φ at 20 % [°] | e0 | wall per run [s] |"
     lines = [head, "|" + "---|" * (len(by) + 7)]
     for _, r in df.iterrows():
-        lines.append("| " + " | ".join(f"{r[b]:g}" if isinstance(r[b], (int, float)) else str(r[b]) for b in by) + f" | {r['n_seeds']} | {iv(r, 'phi_peak_deg')} | "
+        keys = " | ".join(f"{r[b]:g}" if isinstance(r[b], (int, float)) else str(r[b]) for b in by)
+        lines.append(f"| {keys} | {r['n_seeds']} | {iv(r, 'phi_peak_deg')} | "
                      f"{100 * r['eps1_at_peak']:.1f} | {iv(r, 'psi_max_deg')} | {iv(r, 'phi_cs_deg')} | "
                      f"{iv(r, 'void_ratio', '.3f')} | {r['wall_s']:.0f} |")
     return "\n".join(lines)

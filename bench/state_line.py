@@ -29,7 +29,7 @@ from scipy import stats
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from cell_study import from_runs  # noqa: E402
 
-from interphase.analysis.triaxial import psi_from_rate, shear_state  # noqa: E402
+from interphase.analysis.triaxial import friction_angle, psi_from_rate, shear_state  # noqa: E402
 from interphase.io.lab_triaxial import read_triaxial  # noqa: E402
 
 ROWE_HALF = 0.005      # the rate at the peak: ε1 within ±0.5 % of it
@@ -43,9 +43,8 @@ def rate_at(eps1, epsv, at: float) -> float:
 
 
 def rowe_friction_deg(ratio_peak: float, rate_peak: float) -> float:
-    """Rowe's friction part at the peak [°] (module docstring)."""
-    K = ratio_peak / (1 + rate_peak)
-    return math.degrees(math.asin((K - 1) / (K + 1)))
+    """Rowe's friction part at the peak [°] (module docstring): the Mohr–Coulomb angle of K."""
+    return float(friction_angle(ratio_peak / (1 + rate_peak)))
 
 
 def state_row(eps1, epsv, ratio, e) -> dict:
@@ -131,10 +130,10 @@ def figure(model: pd.DataFrame, sand: pd.DataFrame, curves: pd.DataFrame, summ: 
     ids = summ.loc[summ["preparation"].fillna(1.0) == 0.2, "case_id"]
     for cid in ids:
         c = curves[curves["case_id"] == cid]
-        b.plot(c["eps1"] * 100, np.degrees(np.arcsin((c["ratio"] - 1) / (c["ratio"] + 1))), color="C0", lw=1)
+        b.plot(c["eps1"] * 100, friction_angle(c["ratio"]), color="C0", lw=1)
         b2.plot(c["eps1"] * 100, c["epsv"] * 100, color="C0", lw=1, ls="--")
     t = read_triaxial(records / "TMD18.dat").table
-    b.plot(t["eps1"] * 100, np.degrees(np.arcsin((t["ratio"] - 1) / (t["ratio"] + 1))), color="k", lw=1.5)
+    b.plot(t["eps1"] * 100, friction_angle(t["ratio"]), color="k", lw=1.5)
     b2.plot(t["eps1"] * 100, t["epsv"] * 100, color="k", lw=1.5, ls="--")
     b.axhline(33.1, color="grey", lw=0.8, ls=":")
     b.set(xlabel="ε1 [%]", ylabel="mobilised φ [°] (solid)", title="spheres, prep 0.2 (blue) and TMD18 (black)")

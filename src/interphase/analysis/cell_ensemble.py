@@ -39,6 +39,11 @@ GRID_STEP = 0.001      # [-] the common ε1 grid of the seed-mean curves
 CRITICAL_RATE = 0.05
 
 
+def at_critical_state(dilatancy_end: float) -> bool:
+    """Whether the volume has stopped changing at the end (|−dεv/dε1| ≤ CRITICAL_RATE); NaN is not."""
+    return abs(dilatancy_end) <= CRITICAL_RATE
+
+
 @dataclass(frozen=True)
 class CellResult:
     """One soil at one confining stress: angles [°], strains [-], each with a 95 % interval over the
@@ -113,7 +118,7 @@ def cell_result(test: str, confining_stress: float, runs, void_ratios, *, e_limi
     e_min, e_max = e_limits
     dr = (e_max - e.mean()) / (e_max - e_min) if np.isfinite([e_min, e_max]).all() else math.nan
     notes = [] if n >= 2 else ["one seed: no intervals (run ≥ 3 seeds)"]
-    if abs(state.dilatancy_end) > CRITICAL_RATE:
+    if not at_critical_state(state.dilatancy_end):
         notes.append(f"the volume still changes at ε1 = {grid[-1]:.0%} (−dεv/dε1 = {state.dilatancy_end:.2f}): φ_cs is "
                      "the end state's angle, not yet a critical state")
     return CellResult(

@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from interphase.analysis.cell_ensemble import CRITICAL_RATE
+from interphase.analysis.cell_ensemble import at_critical_state
 from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
 from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
@@ -224,10 +224,10 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
 def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
     """calibrate.compare's verdicts on the angles, and the specimens' relative density beside them.
     φ_cs is judged only where the model has reached a critical state (|−dεv/dε1| at the end within
-    CRITICAL_RATE); else its verdict says so and the note says how to get there."""
+    cell_ensemble.CRITICAL_RATE); else its verdict says so and the note says how to get there."""
     checks = compare(lab, r)
     for c in checks:
-        if c["quantity"] == "phi_cs_deg" and not abs(r.dilatancy_end) <= CRITICAL_RATE:
+        if c["quantity"] == "phi_cs_deg" and not at_critical_state(r.dilatancy_end):
             c["verdict"] = NOT_CRITICAL
             c["note"] = (f"the model's volume still changes at ε1 = {r.eps1_end:.0%} (−dεv/dε1 = {r.dilatancy_end:.2f}): "
                          "its end angle is no critical state; run the cell further ([cell] axial_strain: the "
