@@ -1,110 +1,167 @@
-"""A first YADE periodic triaxial cell for grain shape: spheres against dimer clumps under one contact law
-(Hertz–Mindlin, no rolling resistance), the stress from branches between clump centroids (the member
-virial misses what holds a clump together: docs/engines.md). A prototype outside the tool, kept so the
-shape lever can be built from it; NOT a source of numbers yet:
-- the lateral servo is proportional only, so σ3′ runs 35–90 % above its target during the compression
-  (measured: 272–380 kPa for 200 kPa); it needs integral action (or the LIGGGHTS cell's stiffness-scaled
-  gain) before a run means anything;
-- 300 grains (a cell ~6 D50 a side), one seed, the stress loop in Python every 50 steps (YADE's own is
-  the slow part here: ~1 ms a step for 600 spheres on this machine).
+"""YADE side of the grain-shape cell (bench/shape_cell.py writes its input and reads its output): a
+periodic drained triaxial compression of spheres or rigid clumps, run by the same protocol as the
+tool's LIGGGHTS cell (engines/cell.py, recipe.CellRecipe) so that spheres here and there can be
+compared before clumps are read.
 
-    yade -n -x bench/yade_shape_cell.py shape=sphere|dimer n=300 eps=0.3 seed=1 out=hist.json
+    yade -n -x bench/yade_shape_cell.py IN.json
 
-Writes [ε1, εv, σ1′/σ3′, e] every 50 steps of the compression (read with bench/state_line.state_row).
+IN.json (SI units): grains [[[x, y, z, r], ...] per grain: one member = a sphere, more = a clump],
+solid (Σ grain volume, overlaps of a clump's members counted once), L (the start cube), contact (the
+tool's engines.yade.contact_parameters), mu, mu_r, prep, s3, rate, eps_end, dt, gain, every, window,
+compaction_cap, shear_cap, n_consolidate, n_chunk, n_chunks_max, tolerance, settle_energy, n_settle,
+n_history, out.
+
+The stress: YADE's utils.getStress, the Love–Weber sum Σ f ⊗ branch / V, whose branch for a clump
+member runs from its clump's centroid (checked at the end of every consolidation against the sum
+written out here, slow_stress). PeriTriaxController is not used: it sums f ⊗ n (r1 + r2), the branch
+between the touching spheres' centres, which misses what holds a clump together (docs/engines.md).
+Compression positive.
+
+Servo (the LIGGGHTS cell's): each free axis' strain rate = gain·(σ − σ3′)/σ3′ capped at ±cap, σ the
+mean over the last `window` evaluations, one evaluation every `every` steps; the axial axis is driven
+at `rate` (engineering, on the length at the start of the compression). Writes OUT (JSON) last.
 """
 import json
 import math
-import random
 import sys
 import time
-args = dict(a.split('=') for a in sys.argv[1:])
-shape = args.get('shape', 'sphere')          # sphere | dimer
-seed = int(args.get('seed', 1)); n = int(args.get('n', 500)); ar = float(args.get('ar', 1.5))
-mu = float(args.get('mu', 0.53)); s3 = float(args.get('s3', 200e3)); rate = float(args.get('rate', 20.0))
-eps_end = float(args.get('eps', 0.4)); out = args.get('out', 'hist.json')
-G, nu, rho, d50 = 50e6, 0.3, 2650.0, 0.14e-3
-E = 2 * G * (1 + nu)
-random.seed(seed)
+
+from yade import utils
+
+cfg = json.load(open(sys.argv[-1]))
+C = cfg['contact']
+t_wall = time.time()
 O.periodic = True
-mat = O.materials.append(FrictMat(young=E, poisson=nu, frictionAngle=0.0, density=rho))
-# grains: sphere diameter d (sphere) or two spheres of diameter a, centres (ar-1)·a apart (dimer, length ar·a),
-# with a chosen so that the clump's volume equals the sphere's: volume-equivalent diameter d50 for both
-def dimer_a(d):
-    s = ar - 1.0                                  # centre distance in units of a
-    # union volume of two spheres radius a/2 at distance s·a (s<1): 2V - lens
-    r = 0.5; h = r - s / 2                        # cap height
-    v = 2 * (4 / 3 * math.pi * r ** 3) - 2 * (math.pi * h * h * (3 * r - h) / 3)
-    return d * ((math.pi / 6) / v) ** (1 / 3), v
-L = (n * math.pi / 6 * d50 ** 3 / 0.25) ** (1 / 3) * 1.0
+L = cfg['L']
 O.cell.hSize = Matrix3(L, 0, 0, 0, L, 0, 0, 0, L)
-sizes = [d50 * f for f in (0.8, 0.9, 1.0, 1.1, 1.2)]
-for i in range(n):
-    d = random.choice(sizes)
-    c = Vector3(random.random() * L, random.random() * L, random.random() * L)
-    if shape == 'sphere':
-        O.bodies.append(sphere(c, d / 2, material=mat))
+prep = cfg['prep']
+mat = O.materials.append(FrictMat(young=C['E'], poisson=C['nu'], frictionAngle=math.atan(prep * cfg['mu']),
+                                  density=C['density']))
+clumps = False
+for g in cfg['grains']:
+    spheres = [sphere(Vector3(x, y, z), r, material=mat) for x, y, z, r in g]
+    if len(spheres) == 1:
+        O.bodies.append(spheres[0])
     else:
-        a, _ = dimer_a(d)
-        ax = Vector3(random.gauss(0, 1), random.gauss(0, 1), random.gauss(0, 1)).normalized()
-        off = ax * (ar - 1.0) * a / 2
-        O.bodies.appendClumped([sphere(c - off, a / 2, material=mat), sphere(c + off, a / 2, material=mat)])
-def solid_volume():
-    v = 0.0
-    for b in O.bodies:
-        # a clump's mass is its members' sum (YADE's default): at ar 1.5 the overlap counts twice, so the
-        # solid volume reads 18.5 % high and a dimer packing's e low (to fix with updateClumpProperties)
-        if not b.isClumpMember:
-            v += b.state.mass / rho
-    return v
-O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()], allowBiggerThanPeriod=False),
-             InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_MindlinPhys()],
-                             [Law2_ScGeom_MindlinPhys_Mindlin()]),
-             NewtonIntegrator(damping=0.2), PyRunner(iterPeriod=50, command='servo()', label='pr')]
-O.dt = 0.3 * PWaveTimeStep()
-def centre(i):
-    b = O.bodies[i]
-    return O.bodies[b.clumpId].state.pos if b.isClumpMember else b.state.pos
+        O.bodies.appendClumped(spheres)
+        clumps = True
+if clumps:
+    # a clump's mass and inertia from its members' union (appendClumped sums the members, so an
+    # overlap would count twice)
+    O.bodies.updateClumpProperties(discretization=15)
+
+
+def rolling(eta):
+    # YADE caps the rolling moment only when eta > 0: eta 0 with krot > 0 would be an unlimited spring
+    return (C['krot'] if eta > 0 else 0.0), eta
+
+
+krot0, eta0 = rolling(prep * cfg['mu_r'] / 2)
+ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(betan=C['betan'], betas=C['betas'], krot=krot0, eta=eta0)
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb()], allowBiggerThanPeriod=False),
+    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [ip2], [Law2_ScGeom_MindlinPhys_Mindlin(includeMoment=True)]),
+    NewtonIntegrator(damping=0.0),
+    PyRunner(iterPeriod=cfg['every'], command='servo()'),
+]
+O.dt = cfg['dt']
+s3 = cfg['s3']
+solid = cfg['solid']
+
+
 def stress():
-    s = Matrix3.Zero
+    """Diagonal (σxx, σyy, σzz) of the contact stress with centroid branches, compression positive [Pa].
+    utils.getStress takes a clump member's branch from its clump's centroid (measured: it equals
+    slow_stress below, and the member-centre sum reads 12 % lower on dimers at 200 kPa)."""
+    S = -utils.getStress()             # YADE: tension positive
+    return [S[0, 0], S[1, 1], S[2, 2]]
+
+
+def slow_stress(members_only=False):
+    """The same diagonal by the definition, interaction by interaction (a check of stress())."""
+    def centre(i):
+        b = O.bodies[i]
+        return O.bodies[b.clumpId].state.pos if b.isClumpMember and not members_only else b.state.pos
+    S = [0.0, 0.0, 0.0]
     h = O.cell.hSize
     for I in O.interactions:
-        if not I.isReal: continue
-        f = I.phys.normalForce + I.phys.shearForce        # on id2 (YADE: applied to id1 with minus)
-        br = centre(I.id2) - centre(I.id1) + h * Vector3(I.cellDist[0], I.cellDist[1], I.cellDist[2])
-        s += f.outer(br)
-    return s / O.cell.volume                                # compression positive (checked: positive under load)
-t0 = time.time()
-state = {'phase': 'cons', 'hist': [], 'z0': None, 'v0': None}
-GAIN, CAP = 20.0, 50.0
-GAIN_C, CAP_C = 20.0, 50.0
+        if I.isReal:
+            f = I.phys.normalForce + I.phys.shearForce          # on id2
+            br = centre(I.id2) - centre(I.id1) + h * Vector3(*I.cellDist)
+            for k in range(3):
+                S[k] += f[k] * br[k] / O.cell.volume
+    return S
+
+
+st = {'phase': 'cons', 'recent': [], 'hist': [], 'start': 0, 'chunks': 0, 'dep': 0.0, 'gain': cfg['gain']}
+
+
+def ke_per_grain():
+    return utils.kineticEnergy() / len(cfg['grains'])
+
+
+def restore_friction():
+    mu, eta = cfg['mu'], cfg['mu_r'] / 2
+    kr, eta = rolling(eta)
+    O.materials[0].frictionAngle = math.atan(mu)
+    ip2.krot, ip2.eta = kr, eta
+    for I in O.interactions:
+        if I.isReal:
+            I.phys.tangensOfFrictionAngle = mu
+            I.phys.kr = kr
+            I.phys.maxBendPl = eta * 0.5 * (I.geom.refR1 + I.geom.refR2)
+
+
 def servo():
-    S = stress(); sig = [S[0, 0], S[1, 1], S[2, 2]]
+    sig = stress()
+    rec = st['recent']
+    rec.append(sig)
+    del rec[:-cfg['window']]
+    s = [sum(r[k] for r in rec) / len(rec) for k in range(3)]
+    shear = st['phase'] == 'shear'
+    cap = cfg['shear_cap'] if shear else cfg['compaction_cap']
     vg = Matrix3.Zero
-    for k in range(3):
-        if state['phase'] == 'shear' and k == 2:
-            vg[2, 2] = -rate * O.cell.hSize[2, 2] / state['z0']  # engineering rate on the initial length
-            continue
-        g, c = (GAIN, CAP) if state['phase'] == 'shear' else (GAIN_C, CAP_C)
-        vg[k, k] = max(-c, min(c, g * (sig[k] - s3) / s3))
+    for k in range(2 if shear else 3):
+        vg[k, k] = max(-cap, min(cap, st['gain'] * (s[k] - s3) / s3))
+    if shear:
+        vg[2, 2] = -cfg['rate'] * st['z0'] / O.cell.hSize[2, 2]
     O.cell.velGrad = vg
-    if O.iter % 50000 == 0:
-        print(O.iter, state['phase'], [round(x / 1e3, 1) for x in sig], round(unbalancedForce(), 3), round(time.time() - t0, 1), flush=True)
-    if state['phase'] == 'cons':
-        if all(abs(x - s3) < 0.01 * s3 for x in sig) and unbalancedForce() < 0.01:
-            state['phase'] = 'settle'; state['t'] = O.iter
-            O.materials[0].frictionAngle = math.atan(mu)
-            for I in O.interactions:
-                if I.isReal: I.phys.tangensOfFrictionAngle = mu
-    elif state['phase'] == 'settle':
-        if O.iter - state['t'] > 4000 and all(abs(x - s3) < 0.01 * s3 for x in sig):
-            state['phase'] = 'shear'; state['z0'] = O.cell.hSize[2, 2]; state['v0'] = O.cell.volume
-            print('consolidated at', O.iter, 'e0', O.cell.volume / solid_volume() - 1, flush=True)
+    n = O.iter - st['start']
+    if st['phase'] == 'cons':
+        if n >= cfg['n_consolidate'] + st['chunks'] * cfg['n_chunk']:
+            at_rest = ke_per_grain() < cfg['settle_energy'] * s3 * cfg['d50'] ** 3
+            if all(abs(x - s3) < cfg['tolerance'] * s3 for x in s) and at_rest:
+                if cfg.get('check_stress'):
+                    st['stress_check'] = [stress(), slow_stress(), slow_stress(True), list(-utils.getStress().diagonal())]
+                restore_friction()
+                st['phase'], st['start'] = 'settle', O.iter
+            else:
+                st['chunks'] += 1
+                if st['chunks'] > cfg['n_chunks_max']:
+                    st['error'] = 'consolidation did not settle: stresses %s' % s
+                    O.pause()
+    elif st['phase'] == 'settle':
+        if n >= cfg['n_settle']:
+            st['phase'], st['start'] = 'shear', O.iter
+            st['z0'], st['v0'] = O.cell.hSize[2, 2], O.cell.volume
+            st['e0'] = O.cell.volume / solid - 1
+            st['hist'].append((0.0, 0.0, s[2] / (0.5 * (s[0] + s[1])), st['e0']))
     else:
-        e1 = 1 - O.cell.hSize[2, 2] / state['z0']; ev = 1 - O.cell.volume / state['v0']
-        s3m = (sig[0] + sig[1]) / 2
-        state['hist'].append((e1, ev, sig[2] / s3m, O.cell.volume / solid_volume() - 1))
-        if e1 >= eps_end:
-            json.dump(state['hist'], open(out, 'w')); O.pause()
-t = t0 = time.time()
-O.run(); O.wait()
-print('done', shape, seed, 'iters', O.iter, 'wall', round(time.time() - t), flush=True)
+        st['dep'] = max(st['dep'], abs(s[0] - s3) / s3, abs(s[1] - s3) / s3)
+        e1 = 1 - O.cell.hSize[2, 2] / st['z0']
+        if n % cfg['n_history'] == 0 or e1 >= cfg['eps_end']:
+            st['hist'].append((e1, 1 - O.cell.volume / st['v0'], s[2] / (0.5 * (s[0] + s[1])), O.cell.volume / solid - 1))
+        if e1 >= cfg['eps_end']:
+            O.pause()
+
+
+O.run()
+O.wait()
+with open(cfg['out'] + '.part', 'w') as fh:
+    json.dump({'hist': st['hist'], 'e0': st.get('e0'), 'error': st.get('error'),
+               'stress_check': st.get('stress_check'), 'sigma3_departure_max': st['dep'], 'iters': O.iter,
+               'wall': time.time() - t_wall, 'n_grains': len(cfg['grains']), 'n_spheres': len(O.bodies) - len(
+                   [b for b in O.bodies if b.isClump])}, fh)
+import os  # noqa: E402
+os.replace(cfg['out'] + '.part', cfg['out'])     # the result appears whole, last
