@@ -71,7 +71,7 @@ def iv(row, name, fmt=".1f"):
 
 
 def markdown(df: pd.DataFrame, by: list[str]) -> str:
-    head = "| " + " | ".join(by) + " | seeds | φ_peak [°] | ε1 at peak [%] | ψ_max [°] | φ at 20 % [°] | e0 | wall per run [s] |"
+    head = "| " + " | ".join(by) + " | seeds | φ_peak [°] | ε1 at peak [%] | ψ_max [°] | φ at the end [°] | e0 | wall per run [s] |"
     lines = [head, "|" + "---|" * (len(by) + 7)]
     for _, r in df.iterrows():
         keys = " | ".join(f"{r[b]:g}" if isinstance(r[b], (int, float)) else str(r[b]) for b in by)

@@ -66,6 +66,13 @@ O.engines = [
     PyRunner(iterPeriod=cfg['every'], command='servo()'),
 ]
 O.dt = cfg['dt']
+# 'remap' emulates LIGGGHTS' fix deform … remap x: the cell moves, the grains' positions are mapped
+# affinely with it at each servo evaluation, and their velocities never carry the affine field (YADE's
+# default, homoDeform 2, puts ∇v·x into every velocity, so contacts see the affine relative motion)
+REMAP = cfg.get('kinematics', 'yade') == 'remap'
+if REMAP:
+    O.cell.homoDeform = 0
+    st_h = [Matrix3(O.cell.hSize)]
 s3 = cfg['s3']
 solid = cfg['solid']
 
@@ -113,7 +120,17 @@ def restore_friction():
             I.phys.maxBendPl = eta * 0.5 * (I.geom.refR1 + I.geom.refR2)
 
 
+def remap():
+    F = O.cell.hSize * st_h[0].inverse()
+    for b in O.bodies:
+        if not b.isClumpMember:
+            b.state.pos = F * b.state.pos
+    st_h[0] = Matrix3(O.cell.hSize)
+
+
 def servo():
+    if REMAP:
+        remap()
     sig = stress()
     rec = st['recent']
     rec.append(sig)
@@ -136,6 +153,7 @@ def servo():
                     st['stress_check'] = [stress(), slow_stress(), slow_stress(True), list(-utils.getStress().diagonal())]
                 restore_friction()
                 st['phase'], st['start'] = 'settle', O.iter
+                print('consolidated at iter %d, wall %.0f s' % (O.iter, time.time() - t_wall), flush=True)
             else:
                 st['chunks'] += 1
                 if st['chunks'] > cfg['n_chunks_max']:
@@ -152,6 +170,8 @@ def servo():
         e1 = 1 - O.cell.hSize[2, 2] / st['z0']
         if n % cfg['n_history'] == 0 or e1 >= cfg['eps_end']:
             st['hist'].append((e1, 1 - O.cell.volume / st['v0'], s[2] / (0.5 * (s[0] + s[1])), O.cell.volume / solid - 1))
+            if len(st['hist']) % 40 == 0:
+                print('eps1 %.3f  iter %d  wall %.0f s' % (e1, O.iter, time.time() - t_wall), flush=True)
         if e1 >= cfg['eps_end']:
             O.pause()
 
