@@ -49,7 +49,7 @@ def dimer_geometry(aspect: float) -> tuple[float, float]:
     return ((math.pi / 6) / v) ** (1 / 3), v
 
 
-def config(case, shape: str, aspect: float, out: Path, krot_factor: float = 1.0, kinematics: str = "yade") -> dict:
+def config(case, shape: str, aspect: float, out: Path, kinematics: str = "yade") -> dict:
     r = CELL_RECIPE
     k = dimer_geometry(aspect)[0] if shape == "dimer" else 1.0
     length = aspect * k if shape == "dimer" else 1.0
@@ -74,7 +74,6 @@ def config(case, shape: str, aspect: float, out: Path, krot_factor: float = 1.0,
     dt = r.time_step_fraction * rayleigh_time(r_min, case.density, case.shear_modulus, case.poisson)
     steps, n_settle = cell_steps(case, dt, dataclasses.replace(r, servo_every=EVERY))
     M = contact_parameters(case)
-    M["krot"] *= krot_factor
     E = M["E"]
     s3 = case.normal_stress
     return dict(
@@ -87,16 +86,14 @@ def config(case, shape: str, aspect: float, out: Path, krot_factor: float = 1.0,
         check_stress=True, kinematics=kinematics, out=str(out))
 
 
-def run_one(case, shape: str, aspect: float, folder: Path, krot_factor: float = 1.0, kinematics: str = "yade") -> Path:
+def run_one(case, shape: str, aspect: float, folder: Path, kinematics: str = "yade") -> Path:
     tag = f"{case_label(case)}-mu{case.friction_pp:g}-mur{case.rolling_friction:g}"
-    if krot_factor != 1.0:
-        tag += f"-kr{krot_factor:g}"
     if kinematics != "yade":
         tag += f"-{kinematics}"
     out = folder / f"{tag}.json"
     if out.exists():
         return out
-    cfg = config(case, shape, aspect, out.resolve(), krot_factor, kinematics)
+    cfg = config(case, shape, aspect, out.resolve(), kinematics)
     inp = folder / f"{tag}.in.json"
     inp.write_text(json.dumps(cfg))
     with open(folder / f"{tag}.log", "w") as log:
@@ -137,8 +134,6 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--n-grains", type=int)
-    ap.add_argument("--krot-factor", type=float, default=1.0,
-                    help="YADE's rolling stiffness × this (epsd2's kt·R_eff² at the overlaps of 50 MPa grains: ×2.3)")
     ap.add_argument("--kinematics", choices=("yade", "remap"), default="yade",
                     help="remap: LIGGGHTS' fix deform kinematics (positions remapped, no affine velocity)")
     ap.add_argument("--summary", action="store_true", help="only read what has finished")
@@ -149,7 +144,7 @@ def main(argv=None) -> int:
         if a.n_grains:
             cases = [c.replace(n_grains=a.n_grains) for c in cases]
         with ThreadPoolExecutor(a.jobs) as ex:
-            list(ex.map(lambda c: run_one(c, a.shape, a.aspect, a.out, a.krot_factor, a.kinematics), cases))
+            list(ex.map(lambda c: run_one(c, a.shape, a.aspect, a.out, a.kinematics), cases))
     df = summary(a.out)
     pd.set_option("display.width", 200)
     print(df.to_string(index=False, float_format=lambda v: f"{v:.4g}"))

@@ -9,7 +9,8 @@ IN.json (SI units): grains [[[x, y, z, r], ...] per grain: one member = a sphere
 solid (Σ grain volume, overlaps of a clump's members counted once), L (the start cube), contact (the
 tool's engines.yade.contact_parameters), mu, mu_r, prep, s3, rate, eps_end, dt, gain, every, window,
 compaction_cap, shear_cap, n_consolidate, n_chunk, n_chunks_max, tolerance, settle_energy, n_settle,
-n_history, out.
+n_history, out, kinematics ("yade", or "remap": the grains moved with the box as LIGGGHTS' `remap x` does),
+check_stress (compare stress() with the sum written out, at the end of consolidation).
 
 The stress: YADE's utils.getStress, the Love–Weber sum Σ f ⊗ branch / V, whose branch for a clump
 member runs from its clump's centroid (checked at the end of every consolidation against the sum
@@ -150,7 +151,7 @@ def servo():
             at_rest = ke_per_grain() < cfg['settle_energy'] * s3 * cfg['d50'] ** 3
             if all(abs(x - s3) < cfg['tolerance'] * s3 for x in s) and at_rest:
                 if cfg.get('check_stress'):
-                    st['stress_check'] = [stress(), slow_stress(), slow_stress(True), list(-utils.getStress().diagonal())]
+                    st['stress_check'] = [stress(), slow_stress(), slow_stress(True)]
                 restore_friction()
                 st['phase'], st['start'] = 'settle', O.iter
                 print('consolidated at iter %d, wall %.0f s' % (O.iter, time.time() - t_wall), flush=True)
@@ -169,7 +170,8 @@ def servo():
         st['dep'] = max(st['dep'], abs(s[0] - s3) / s3, abs(s[1] - s3) / s3)
         e1 = 1 - O.cell.hSize[2, 2] / st['z0']
         if n % cfg['n_history'] == 0 or e1 >= cfg['eps_end']:
-            st['hist'].append((e1, 1 - O.cell.volume / st['v0'], s[2] / (0.5 * (s[0] + s[1])), O.cell.volume / solid - 1))
+            e = O.cell.volume / solid - 1
+            st['hist'].append((e1, 1 - O.cell.volume / st['v0'], s[2] / (0.5 * (s[0] + s[1])), e))
             if len(st['hist']) % 40 == 0:
                 print('eps1 %.3f  iter %d  wall %.0f s' % (e1, O.iter, time.time() - t_wall), flush=True)
         if e1 >= cfg['eps_end']:

@@ -17,8 +17,9 @@ friction scaled by `Case.preparation` (0: frictionless, the densest this protoco
 hold σ3′. During the compression the box moves and the grains do not jump with it: the periodic images
 carry the box's velocity, so the mean motion reaches the grains through contacts and each contact's
 tangential spring sees its whole relative motion (moving the grains with the box, as in consolidation,
-hides the affine part from it and lowers φ_peak by ~5° and φ at 40 % by ~8°: docs/soils.md). Quasi-2D: one grain layer at y = 0 (forces in y set to 0, as in the shear devices), y not
-deformed; stresses are per the thickness t = D50 (Case.thickness), so σ = virial/(Lx·Lz·t).
+hides the affine part from it and lowers φ_peak by ~5° and φ at 40 % by ~8°: docs/soils.md).
+Quasi-2D: one grain layer at y = 0 (forces in y set to 0, as in the shear devices), y not deformed;
+stresses are per the thickness t = D50 (Case.thickness), so σ = virial/(Lx·Lz·t).
 
 Frame: z the axial (major principal) direction, compression positive. Units SI.
 """
