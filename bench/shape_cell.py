@@ -31,7 +31,7 @@ import pandas as pd
 from interphase.analysis.triaxial import shear_state
 from interphase.campaign.plan import case_label
 from interphase.campaign.schema import load_campaign
-from interphase.engines.cell import cell_lattice, cell_steps
+from interphase.engines.cell import cell_lattice, cell_steps, servo_gain
 from interphase.engines.yade import contact_parameters
 from interphase.material import rayleigh_time
 from interphase.recipe import CELL_RECIPE
@@ -40,18 +40,19 @@ HERE = Path(__file__).resolve().parent
 EVERY = 20          # steps between servo evaluations (the LIGGGHTS cell: 10; the gain keeps per-update change)
 
 
-def dimer_geometry(aspect: float) -> tuple[float, float]:
-    """(a/d, union volume of a dimer of member diameter 1) for centre distance (aspect − 1)·a."""
+def dimer_member_diameter(aspect: float) -> float:
+    """a/d: the member diameter of a dimer (centres (aspect − 1)·a apart, aspect < 2) whose union has
+    the volume of a sphere of diameter d."""
     s = aspect - 1.0
     r = 0.5
     h = r - s / 2                                   # each lens cap's height (s < 1: the members overlap)
-    v = 2 * (4 / 3 * math.pi * r ** 3) - 2 * (math.pi * h * h * (3 * r - h) / 3)
-    return ((math.pi / 6) / v) ** (1 / 3), v
+    v = 2 * (4 / 3 * math.pi * r ** 3) - 2 * (math.pi * h * h * (3 * r - h) / 3)    # union, members of diameter 1
+    return ((math.pi / 6) / v) ** (1 / 3)
 
 
 def config(case, shape: str, aspect: float, out: Path, kinematics: str = "yade") -> dict:
     r = CELL_RECIPE
-    k = dimer_geometry(aspect)[0] if shape == "dimer" else 1.0
+    k = dimer_member_diameter(aspect) if shape == "dimer" else 1.0
     length = aspect * k if shape == "dimer" else 1.0
     lat = dataclasses.replace(r, lattice_pitch=r.lattice_pitch * length)
     pack, size = cell_lattice(case, lat)
@@ -73,13 +74,12 @@ def config(case, shape: str, aspect: float, out: Path, kinematics: str = "yade")
     solid = float(np.sum(math.pi / 6 * d ** 3))            # volume-equivalent: the same for both shapes
     dt = r.time_step_fraction * rayleigh_time(r_min, case.density, case.shear_modulus, case.poisson)
     steps, n_settle = cell_steps(case, dt, dataclasses.replace(r, servo_every=EVERY))
-    M = contact_parameters(case)
-    E = M["E"]
     s3 = case.normal_stress
     return dict(
-        grains=grains, solid=solid, L=size[0], contact=M, mu=case.friction_pp, mu_r=case.rolling_friction,
+        grains=grains, solid=solid, L=size[0], contact=contact_parameters(case),
+        mu=case.friction_pp, mu_r=case.rolling_friction,
         prep=case.preparation, s3=s3, rate=case.strain_rate, eps_end=case.axial_strain, dt=dt, d50=case.d50,
-        gain=r.servo_gain * (s3 / (E / (2 * (1 - case.poisson ** 2)))) ** (2 / 3) / (EVERY * dt),
+        gain=servo_gain(case, dt, EVERY),
         every=EVERY, window=r.servo_window, compaction_cap=r.compaction_cap, shear_cap=r.shear_cap,
         n_consolidate=steps.n_consolidate, n_chunk=steps.n_chunk, n_chunks_max=steps.n_chunks_max,
         tolerance=r.tolerance, settle_energy=r.settle_energy, n_settle=n_settle, n_history=steps.n_history,

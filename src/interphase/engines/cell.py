@@ -34,7 +34,7 @@ import numpy as np
 
 from interphase.case import Case
 from interphase.engines.packing import Packing
-from interphase.material import rayleigh_time
+from interphase.material import rayleigh_time, youngs_modulus
 from interphase.recipe import CELL_RECIPE, RECIPE, CellRecipe, RunRecord, Steps
 
 
@@ -81,6 +81,14 @@ def cell_steps(case: Case, dt: float, r: CellRecipe = CELL_RECIPE) -> tuple[Step
     return Steps(n_consolidate=steps(r.consolidation_time), n_chunk=steps(r.chunk_time),
                  n_chunks_max=r.consolidation_chunks, n_shear=n_shear, n_snapshot=n_history,
                  n_history=n_history), steps(r.chunk_time)
+
+
+def servo_gain(case: Case, dt: float, every: int, r: CellRecipe = CELL_RECIPE) -> float:
+    """The servo's gain G [1/s] for an evaluation every `every` steps of `dt` [s]:
+    servo_gain·(σ3′/E*)^(2/3)/(every·dt), E* = E/(2(1 − ν²)) (CellRecipe: the same relative stress
+    change per update at any stress and stiffness)."""
+    E = youngs_modulus(case.shear_modulus, case.poisson)
+    return r.servo_gain * (case.normal_stress / (E / (2 * (1 - case.poisson ** 2)))) ** (2 / 3) / (every * dt)
 
 
 def cell_lattice(case: Case, r: CellRecipe = CELL_RECIPE) -> tuple[Packing, tuple[float, float, float]]:

@@ -20,7 +20,7 @@ import numpy as np
 
 from interphase.case import Case
 from interphase.engines.base import Engine, Results, log_tail, not_consolidated, register
-from interphase.engines.cell import Cell, cell
+from interphase.engines.cell import Cell, cell, servo_gain
 from interphase.engines.device import Device, device, time_step
 from interphase.engines.packing import write_liggghts_data
 from interphase.engines.render import environment
@@ -89,7 +89,7 @@ def cell_values(c: Cell) -> dict:
     tol, s3 = r.tolerance, case.normal_stress
     prep = case.preparation
     E = youngs_modulus(case.shear_modulus, case.poisson)
-    gain = r.servo_gain * (s3 / (E / (2 * (1 - case.poisson ** 2)))) ** (2 / 3) / (r.servo_every * c.dt)
+    gain = servo_gain(case, c.dt, r.servo_every, r)
     return dict(version=__version__, title=case.test, three_d=c.three_d,
                 E=E, nu=case.poisson, restitution=case.restitution,
                 friction=case.friction_pp, rolling=case.rolling_friction, prep_friction=prep * case.friction_pp,
