@@ -88,6 +88,27 @@ def test_a_card_names_the_relative_density_it_stands_for_and_a_bad_one_is_refuse
     assert str(path) in str(err.value) or "s.toml" in str(err.value)
 
 
+def test_a_laboratory_dr_is_read_on_the_cards_lab_span_and_a_bad_span_is_refused(tmp_path):
+    """SoilCard.lab_span moves the densest end of the model's span, never its loosest (campaign/density.py)."""
+    from interphase.campaign.density import lab_limits
+    from interphase.soil import load_card
+
+    assert lab_limits(0.5, 0.8, 1.0) == (0.5, 0.8)
+    lo, hi = lab_limits(0.5, 0.8, 0.6)
+    assert hi == 0.8 and lo == pytest.approx(0.62)
+    # a laboratory Dr of 0.785 on a span of 0.6 is the model's own Dr 0.471
+    assert (hi - (hi - 0.785 * (hi - lo))) / (0.8 - 0.5) == pytest.approx(0.785 * 0.6)
+    path = tmp_path / "s.toml"
+    base = CARD.format(name="s", test="triaxial", n=200, strain=0.03)
+    path.write_text(base)
+    assert load_card(path).lab_span == 1.0
+    path.write_text(base + "\n[density]\nlab_span = 0.6\n")
+    assert load_card(path).lab_span == 0.6
+    path.write_text(base + "\n[density]\nlab_span = -0.6\n")
+    with pytest.raises(InputError, match=r"lab_span.*positive"):
+        load_card(path)
+
+
 def test_yade_refuses_the_cell_with_the_engine_that_runs_it():
     from interphase.engines.yade import Yade
 
@@ -307,11 +328,8 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     sieve = next(ln for ln in text.splitlines() if ln.startswith("gradation = {sizes = [8.263e-05"))
     text = text.replace(sieve, f"gradation = {{sizes = {list(GRAINS.sizes)}, fractions = {list(GRAINS.fractions)}}}")
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
-    text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.2", "axial_strain = 0.02")
-    # the shipped target leaves the published φ_c out (it is measured at 40 % after the fit); the
-    # machinery's φ_c path is part of what this run checks
-    text = text.replace("e_max = 1.054\n", "e_max = 1.054\nphi_cs_deg = 33.1\n", 1)
-    assert "phi_cs_deg = 33.1" in text
+    text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.4", "axial_strain = 0.02")
+    assert "phi_cs_deg = 33.1" in text and "axial_strain = 0.02" in text
     text += "\n[budget.quick]\nsamples = 2\n"
     target = tmp_path / "targets" / "tiny.toml"
     target.parent.mkdir()
@@ -331,6 +349,11 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     assert {c["quantity"] for c in out["achieved"]} == {"phi_peak_deg", "psi_max_deg", "phi_cs_deg", "relative_density"}
     lab = {c["quantity"]: c["laboratory"] for c in out["achieved"]}
     assert lab["phi_peak_deg"] == pytest.approx(40.39, abs=0.01)      # TMD17, read from the record itself
+    # the record's Dr is not fitted: it sets the card's density scale, which maps it back onto the
+    # fitted state (the achieved run is at the record's Dr on that scale)
+    assert card.lab_span == pytest.approx(out["density"]["model_relative_density"] / 0.7847, rel=1e-3)
+    dr = next(c for c in out["achieved"] if c["quantity"] == "relative_density")
+    assert dr["measured"] == pytest.approx(0.7847, abs=0.05)
     before = Path(out["card"]).read_bytes()
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert again.returncode == 2 and Path(out["card"]).read_bytes() == before

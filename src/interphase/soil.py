@@ -75,6 +75,15 @@ class SoilCard:
         return float(d.get("e_min", "nan")), float(d.get("e_max", "nan"))
 
     @property
+    def lab_span(self) -> float:
+        """The share of the model's span of void ratios (frictionless preparation to the grains' own
+        friction, at a test's stress) that the laboratory's e_max − e_min stands for ([density]
+        lab_span, set by a calibration against records: the model's Dr at the fitted state over the
+        record's); a laboratory Dr maps onto e = e_max − Dr · lab_span · (e_max − e_min). 1 when the
+        card has none: the model's own limits are the laboratory's."""
+        return float(self.extra.get("density", {}).get("lab_span", 1.0))
+
+    @property
     def quick(self) -> bool:
         """Written by `campaign calibrate --quick`: a first look, not a calibrated soil."""
         return bool(self.extra.get("calibration", {}).get("quick", False))
@@ -186,6 +195,10 @@ def _check_cell(card: SoilCard, bad) -> None:
     dr = card.extra.get("cell", {}).get("relative_density")
     if dr is not None and not (isinstance(dr, (int, float)) and 0 <= dr <= 1):
         raise bad("cell", "relative_density", f"must be a fraction in [0, 1], got {dr!r}", "e.g. relative_density = 0.81")
+    span = card.extra.get("density", {}).get("lab_span")
+    if span is not None and not (isinstance(span, (int, float)) and span > 0):
+        raise bad("density", "lab_span", f"must be a positive share, got {span!r}",
+                  "the model's Dr at the fitted state over the record's (campaign calibrate writes it)")
     if card.cell["test"] not in ("triaxial", "biaxial"):
         raise bad("cell", "test", f"unknown cell test {card.cell['test']!r}", 'use "triaxial" (3D) or "biaxial" (2D)')
     try:

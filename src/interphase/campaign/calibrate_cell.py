@@ -19,17 +19,16 @@ in the cell (engines/cell.py), by the same GrainLearning filter as the direct-sh
     record = "../../lab/soils/karlsruhe-fine-sand/drained-triaxial/TMD18.dat"
 
 Observations of a sample (its seeds together, analysis.cell_ensemble): φ_peak and ψ_max against the
-record's own (analysis.triaxial on the record: the same code), φ at the end against phi_cs_deg when
-given (judged only where the model's volume has stopped changing: `_checks`), and the relative
-density of its specimen at the record's σ3′ against the record's Dr0. The model's Dr needs its own
+record's own (analysis.triaxial on the record: the same code), and φ at the end against phi_cs_deg
+when given (judged only where the model's volume has stopped changing: `_checks`). The record's Dr0
+is not matched (CellTarget.values); each sample's Dr is recorded beside its angles, on its own
 e_min (the frictionless preparation: the same for every sample, measured once) and e_max (the
 loosest packing at the sample's own friction: one token consolidation per sample), both at the
-record's stress, as every relative density of the model is (campaign/density.py,
-`preparation_at`). Likelihood spreads ∝ TOLERANCES.
+record's stress. Likelihood spreads ∝ TOLERANCES.
 
-After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains),
-then the laboratory's test on it at the fitted record and at every held-out one, each at that record's
-σ3′ and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
+After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains,
+with lab_span: the model's Dr at the fitted state over the record's, `_lab_span`), then the
+laboratory's test on it at the fitted record and at every held-out one, each at that record's σ3′ and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
 """
 
 from __future__ import annotations
@@ -85,7 +84,10 @@ class CellTarget:
 
     @property
     def values(self) -> dict:
-        return dict(self.record.values, relative_density=self.record.relative_density)
+        """What the fit matches: the record's angles. Its Dr is not matched: the spheres dilate more
+        than the sand at the same Dr on their own limits (docs/soils.md, "Density follows dilatancy"),
+        so the model's Dr is measured at the fitted state and fixes the card's density scale."""
+        return dict(self.record.values)
 
 
 def is_cell_target(path) -> bool:
@@ -236,6 +238,26 @@ def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
                       "difference": r.relative_density - dr_lab, "tolerance": TOLERANCES["relative_density"]}]
 
 
+def _lab_span(card: SoilCard, rec: Record, seeds, output: Path, executor, jobs, stream, rerun_failed):
+    """(lab_span, the model's Dr at the fitted state): the chosen grains' void-ratio map at the
+    record's stress (the same token runs `run_cell` reads there, so nothing is run twice), its
+    preparation's e read on the model's own limits. lab_span = that Dr over the record's: the
+    laboratory's Dr then maps back onto the fitted state, and every other Dr onto the same share of
+    the model's span (SoilCard.lab_span)."""
+    from interphase.campaign.density import MAP_SEEDS, PREPARATIONS, void_ratio_map
+
+    prep = float(card.soil["preparation"])
+    p, e = void_ratio_map(card, nominal(rec.confining_stress), list(seeds)[:MAP_SEEDS], output=output,
+                          preparations=sorted({*PREPARATIONS, round(prep, 4)}), executor=executor, jobs=jobs,
+                          stream=stream, rerun_failed=rerun_failed)
+    if not np.isfinite(e).all():
+        raise InputError("the chosen grains' void-ratio map has runs that did not finish", where=str(output),
+                         fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
+    e_fit = float(e[p.index(round(prep, 4))])
+    model_dr = (e[-1] - e_fit) / (e[-1] - e[0])
+    return round(float(model_dr / rec.relative_density), 4), round(float(model_dr), 4)
+
+
 def nominal(stress: float) -> float:
     """The model's confining stress for a record's [Pa]: the nearest multiple of 50 kPa (the records'
     programme: 48.9–50.9 kPa are its 50 kPa tests, 392.1–401.5 its 400 kPa ones), so that one density
@@ -288,6 +310,8 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
     density = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(target.cell["n_grains"]),
                "preparations": list(prep), "void_ratios": [round(float(v), 5) for v in e],
                "e_min": round(float(e[0]), 5), "e_max": round(float(e[-1]), 5)}
+    density["lab_span"], density["model_relative_density"] = _lab_span(
+        card, target.record, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
     card.extra["density"] = density
     achieved, verification, n_final = _final(card, target, list(range(1, int(budget["final_seeds"]) + 1)),
                                              runs / f"final{tag}", executor, jobs, stream, rerun_failed)

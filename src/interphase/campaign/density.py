@@ -64,8 +64,8 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     """(preparation, (e_min, e_max)) at `stress` [Pa]: the limits are the void ratios the preparation
     makes at that stress, frictionless (0) and at the grains' own friction (1), from the map
     e(preparation) measured there (token compressions at PREPARATIONS on the first MAP_SEEDS of
-    `seeds`; resumable); the preparation is that map inverted at e = e_max − Dr (e_max − e_min), None
-    without a relative density. Why the test's stress and not the index tests' near-zero one: the
+    `seeds`; resumable), e_min moved by the card's lab_span (`lab_limits`); the preparation is that
+    map inverted at e = e_max − Dr (e_max − e_min), None without a relative density. Why the test's stress and not the index tests' near-zero one: the
     soft grains squeeze (at G = 50 MPa a packing's e falls ~0.07 from 10 to 100 kPa, docs/soils.md),
     a sand's barely; on limits at 10 kPa a dense specimen at 100 kPa read Dr 1.5 and one Dr would mean
     looser and looser packings as the stress rises.
@@ -84,7 +84,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
     prep, e = void_ratio_map(card, stress, seeds, **kw)
-    limits = (float(e[0]), float(e[-1]))
+    limits = lab_limits(float(e[0]), float(e[-1]), card.lab_span)
     if relative_density is None:
         return None, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
@@ -99,6 +99,13 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
             return guess, limits
         prep, e = void_ratio_map(card, stress, seeds, preparations=sorted({*prep, guess}), **kw)
     return guess, limits
+
+
+def lab_limits(e_min: float, e_max: float, span: float) -> tuple[float, float]:
+    """(e_min, e_max) that a laboratory Dr is read on: the model's loosest packing shared, its densest
+    moved to e_max − span (e_max − e_min) (SoilCard.lab_span: the spheres dilate more than the sand
+    at the same Dr on their own limits, docs/soils.md "Density follows dilatancy")."""
+    return e_max - span * (e_max - e_min), e_max
 
 
 def invert_map(prep, e, target: float) -> float:
