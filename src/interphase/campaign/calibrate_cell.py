@@ -28,7 +28,8 @@ record's stress. Likelihood spreads ∝ TOLERANCES.
 
 After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains,
 with lab_span: the model's Dr at the fitted state over the record's, `_lab_span`), then the
-laboratory's test on it at the fitted record and at every held-out one, each at that record's σ3′ and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
+laboratory's test on it at the fitted record and at every held-out one, each at that record's σ3′
+and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
 """
 
 from __future__ import annotations

@@ -65,10 +65,11 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     makes at that stress, frictionless (0) and at the grains' own friction (1), from the map
     e(preparation) measured there (token compressions at PREPARATIONS on the first MAP_SEEDS of
     `seeds`; resumable), e_min moved by the card's lab_span (`lab_limits`); the preparation is that
-    map inverted at e = e_max − Dr (e_max − e_min), None without a relative density. Why the test's stress and not the index tests' near-zero one: the
-    soft grains squeeze (at G = 50 MPa a packing's e falls ~0.07 from 10 to 100 kPa, docs/soils.md),
-    a sand's barely; on limits at 10 kPa a dense specimen at 100 kPa read Dr 1.5 and one Dr would mean
-    looser and looser packings as the stress rises.
+    map inverted at e = e_max − Dr (e_max − e_min), None without a relative density. Why the test's
+    stress and not the index tests' near-zero one: the soft grains squeeze (at G = 50 MPa a packing's
+    e falls ~0.07 from 10 to 100 kPa, docs/soils.md), a sand's barely; on limits at 10 kPa a dense
+    specimen at 100 kPa read Dr 1.5 and one Dr would mean looser and looser packings as the stress
+    rises.
 
     The map is refined where it is read: e(preparation) is steep and curved near 0, where every Dr
     above ~0.55 lies (Karlsruhe card at 200 kPa: e 0.417 at 0, 0.454 at 0.061, 0.474 at 0.117, 0.521
