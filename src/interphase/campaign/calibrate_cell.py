@@ -240,23 +240,15 @@ def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
 
 
 def _lab_span(card: SoilCard, rec: Record, seeds, output: Path, executor, jobs, stream, rerun_failed):
-    """(lab_span, the model's Dr at the fitted state): the chosen grains' void-ratio map at the
-    record's stress (the same token runs `run_cell` reads there, so nothing is run twice), its
-    preparation's e read on the model's own limits. lab_span = that Dr over the record's: the
-    laboratory's Dr then maps back onto the fitted state, and every other Dr onto the same share of
-    the model's span (SoilCard.lab_span)."""
-    from interphase.campaign.density import MAP_SEEDS, PREPARATIONS, void_ratio_map
+    """(lab_span, the model's own Dr at the fitted state at the record's stress): lab_span = that Dr
+    over the record's, so the laboratory's Dr maps back onto the fitted state and every other Dr onto
+    the same share of the model's span (SoilCard.lab_span)."""
+    from interphase.campaign.density import own_relative_density
 
-    prep = float(card.soil["preparation"])
-    p, e = void_ratio_map(card, nominal(rec.confining_stress), list(seeds)[:MAP_SEEDS], output=output,
-                          preparations=sorted({*PREPARATIONS, round(prep, 4)}), executor=executor, jobs=jobs,
-                          stream=stream, rerun_failed=rerun_failed)
-    if not np.isfinite(e).all():
-        raise InputError("the chosen grains' void-ratio map has runs that did not finish", where=str(output),
-                         fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
-    e_fit = float(e[p.index(round(prep, 4))])
-    model_dr = (e[-1] - e_fit) / (e[-1] - e[0])
-    return round(float(model_dr / rec.relative_density), 4), round(float(model_dr), 4)
+    model_dr = own_relative_density(card, nominal(rec.confining_stress), seeds, card.soil["preparation"],
+                                    output=output, executor=executor, jobs=jobs, stream=stream,
+                                    rerun_failed=rerun_failed)
+    return round(model_dr / rec.relative_density, 4), round(model_dr, 4)
 
 
 def nominal(stress: float) -> float:

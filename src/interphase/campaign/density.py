@@ -90,16 +90,36 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
         return None, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
     for _ in range(REFINE + 1):
-        if not np.isfinite(e).all():
-            raise InputError(f"the void-ratio map at {stress / 1e3:g} kPa has runs that did not finish",
-                             where=str(output),
-                             fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
+        _finished(e, stress, output)
         guess = invert_map(prep, e, target)
         if guess in prep or len(prep) >= len(PREPARATIONS) + REFINE or \
                 np.min(np.abs(e - target)) <= E_TOL:
             return guess, limits
         prep, e = void_ratio_map(card, stress, seeds, preparations=sorted({*prep, guess}), **kw)
     return guess, limits
+
+
+def own_relative_density(card: SoilCard, stress: float, seeds, preparation: float, *, output: Path, executor=None,
+                         jobs=None, stream=None, rerun_failed: bool = False) -> float:
+    """The model's own Dr [-] (on its limits at `stress` [Pa], lab_span not applied) of the specimen
+    `preparation` makes there: the void-ratio map with that point added (the same token runs
+    `preparation_at` reads in `output`, so nothing runs twice)."""
+    p = round(float(preparation), 4)
+    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], output=output,
+                             preparations=sorted({*PREPARATIONS, p}), executor=executor, jobs=jobs, stream=stream,
+                             rerun_failed=rerun_failed)
+    _finished(e, stress, output)
+    return float((e[-1] - e[prep.index(p)]) / (e[-1] - e[0]))
+
+
+def _finished(e, stress: float, output: Path) -> None:
+    """Refuse a void-ratio map with a run that did not finish, saying where to look."""
+    from interphase.errors import InputError
+
+    if not np.isfinite(e).all():
+        raise InputError(f"the void-ratio map at {stress / 1e3:g} kPa has runs that did not finish",
+                         where=str(output),
+                         fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
 
 
 def lab_limits(e_min: float, e_max: float, span: float) -> tuple[float, float]:
