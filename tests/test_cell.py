@@ -354,6 +354,8 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     assert card.lab_span == pytest.approx(out["density"]["model_relative_density"] / 0.7847, rel=1e-3)
     dr = next(c for c in out["achieved"] if c["quantity"] == "relative_density")
     assert dr["measured"] == pytest.approx(0.7847, abs=0.05)
+    # ... exactly: the map that read the record's Dr holds the fitted point _lab_span measured
+    assert out["achieved_preparation"] == pytest.approx(card.soil["preparation"], abs=2e-4)
     before = Path(out["card"]).read_bytes()
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert again.returncode == 2 and Path(out["card"]).read_bytes() == before

@@ -32,3 +32,18 @@ def test_denser_targets_never_ask_for_a_looser_preparation(es, t1, t2):
     lo, hi = sorted((t1, t2))
     a, b = invert_map(prep, es, lo), invert_map(prep, es, hi)
     assert 0.0 <= a <= b <= 1.0
+
+
+def test_a_map_keeps_the_points_measured_before_for_the_same_grains_and_seeds(tmp_path):
+    """A map redrawn in its folder never drops a point (campaign/density.py `_mapped`): the fitted
+    state a calibration measured stays on the map that later reads the record's Dr there."""
+    from interphase.campaign.density import _mapped
+    from interphase.campaign.element import write_campaign
+
+    case = {"test": "triaxial", "n_grains": 150, "friction_pp": 0.43, "normal_stress": 100e3}
+    path = tmp_path / "density-x-100kPa.toml"
+    assert _mapped(path, case, [1, 2]) == []
+    write_campaign(path, name="density-x-100kPa", case=case, sweep={"preparation": [0.0, 0.3115, 1.0], "seed": [1, 2]})
+    assert _mapped(path, case, [1, 2]) == [0.0, 0.3115, 1.0]
+    assert _mapped(path, case, [3, 4]) == []                                  # other seeds: a map of their own
+    assert _mapped(path, {**case, "friction_pp": 0.5}, [1, 2]) == []           # other grains, likewise

@@ -260,7 +260,8 @@ def nominal(stress: float) -> float:
 
 def _final(card: SoilCard, target: CellTarget, seeds, runs: Path, executor, jobs, stream, rerun_failed):
     """The laboratory's test on the chosen grains at every record's σ3′ and Dr0 (the fitted one
-    first): ([achieved checks], [verification entries], finished runs in `runs`)."""
+    first): ([achieved checks], the fitted record's preparation, [verification entries], finished
+    runs in `runs`)."""
     from interphase.campaign.cell import run_cell
 
     out = []
@@ -273,7 +274,7 @@ def _final(card: SoilCard, target: CellTarget, seeds, runs: Path, executor, jobs
                                  or k in ("n_seeds", "relative_density", "dilatancy_end")},
                     "checks": _checks(rec.values, r, rec.relative_density)})
     # the tests and the density maps' token runs (5 a stress and the refinement's) that finished
-    return out[0]["checks"], out[1:], sum(1 for _ in Path(runs).rglob(st.DONE)) if Path(runs).is_dir() else 0
+    return out[0]["checks"], out[0]["preparation"], out[1:], sum(1 for _ in Path(runs).rglob(st.DONE)) if Path(runs).is_dir() else 0
 
 
 def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
@@ -306,14 +307,14 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
     density["lab_span"], density["model_relative_density"] = _lab_span(
         card, target.record, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
     card.extra["density"] = density
-    achieved, verification, n_final = _final(card, target, list(range(1, int(budget["final_seeds"]) + 1)),
+    achieved, achieved_prep, verification, n_final = _final(card, target, list(range(1, int(budget["final_seeds"]) + 1)),
                                              runs / f"final{tag}", executor, jobs, stream, rerun_failed)
     import pandas as pd
 
     runs.mkdir(parents=True, exist_ok=True)
     pd.DataFrame(history).to_csv(runs / f"samples{tag}.csv", index=False)
     result = {"card": str(card_at), "target": name, "chosen": chosen, "posterior": posterior, "achieved": achieved,
-              "verification": verification, "density": density,
+              "achieved_preparation": achieved_prep, "verification": verification, "density": density,
               "calibration": {"runs": n_runs + 2 + 2 * len(prep) + n_final, "wall_time_s": round(time.time() - t0, 1),
                               "iterations": int(budget["iterations"]), "samples": len(history),
                               "effective_sample_size": ess, "e_min_frictionless": e_min, "budget": budget,

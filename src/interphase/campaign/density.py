@@ -46,11 +46,11 @@ def measure_density(card: SoilCard, seeds, *, output: Path | None = None, execut
                     stream=None, rerun_failed: bool = False) -> dict:
     seeds = [int(s) for s in seeds]
     output = density_runs(card, output)[0]
-    _, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs, stream=stream,
-                          rerun_failed=rerun_failed)
+    prep, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs,
+                             stream=stream, rerun_failed=rerun_failed)
     e = [float(v) for v in e]
     table = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(card.cell["n_grains"]),
-             "preparations": list(PREPARATIONS), "void_ratios": [round(v, 5) for v in e],
+             "preparations": prep, "void_ratios": [round(v, 5) for v in e],
              "e_min": round(e[0], 5), "e_max": round(e[-1], 5),
              "method": "campaign density: isotropic consolidation of the card's cell at the reference stress, grain "
                        "friction scaled by the preparation; e at the start of the axial compression, seed mean"}
@@ -76,7 +76,8 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     at 0.25), so a straight segment between the coarse points picks preparations that pack looser
     than asked (Dr 0.03-0.05 less, measured). Up to REFINE times, the preparation read off the map is
     measured itself (the same token runs) and the map read again, until that point's e is within
-    E_TOL of the target."""
+    E_TOL of the target. Points an earlier call measured in `output` stay on the map
+    (`void_ratio_map`), so a record's Dr read twice picks one preparation."""
     from interphase.errors import InputError
 
     if relative_density is not None and not 0 <= relative_density <= 1:
@@ -85,15 +86,15 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
     prep, e = void_ratio_map(card, stress, seeds, **kw)
-    limits = lab_limits(float(e[0]), float(e[-1]), card.lab_span)
+    limits = lab_limits(float(e[prep.index(0.0)]), float(e[prep.index(1.0)]), card.lab_span)
     if relative_density is None:
         return None, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
+    known = len(prep)
     for _ in range(REFINE + 1):
         _finished(e, stress, output)
         guess = invert_map(prep, e, target)
-        if guess in prep or len(prep) >= len(PREPARATIONS) + REFINE or \
-                np.min(np.abs(e - target)) <= E_TOL:
+        if guess in prep or len(prep) >= known + REFINE or np.min(np.abs(e - target)) <= E_TOL:
             return guess, limits
         prep, e = void_ratio_map(card, stress, seeds, preparations=sorted({*prep, guess}), **kw)
     return guess, limits
@@ -109,7 +110,8 @@ def own_relative_density(card: SoilCard, stress: float, seeds, preparation: floa
                              preparations=sorted({*PREPARATIONS, p}), executor=executor, jobs=jobs, stream=stream,
                              rerun_failed=rerun_failed)
     _finished(e, stress, output)
-    return float((e[-1] - e[prep.index(p)]) / (e[-1] - e[0]))
+    e_min, e_max = e[prep.index(0.0)], e[prep.index(1.0)]
+    return float((e_max - e[prep.index(p)]) / (e_max - e_min))
 
 
 def _finished(e, stress: float, output: Path) -> None:
@@ -141,14 +143,17 @@ def invert_map(prep, e, target: float) -> float:
 
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
                    stream=None, rerun_failed: bool = False, preparations=PREPARATIONS) -> tuple[list, np.ndarray]:
-    """(preparations, seed-mean e at the start of a token compression at `stress` for each); a
-    preparation's runs have the same id in every map that holds it, so a finer map reruns nothing."""
-    preparations = [float(p) for p in preparations]
+    """(preparations ascending, seed-mean e at the start of a token compression at `stress` for each):
+    `preparations` and every point the map in `output` already holds for the same grains and seeds (a
+    map only grows: a point measured once is never dropped); a preparation's runs have the same id in
+    every map that holds it, so a finer map reruns nothing."""
+    seeds = [int(s) for s in seeds]
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
     name = f"density-{card.name}-{stress / 1e3:g}kPa"
-    path = write_campaign(Path(output) / f"{name}.toml", name=name, case=base,
-                          sweep={"preparation": preparations, "seed": [int(s) for s in seeds]},
+    path = Path(output) / f"{name}.toml"
+    preparations = sorted({*(float(p) for p in preparations), *_mapped(path, base, seeds)})
+    path = write_campaign(path, name=name, case=base, sweep={"preparation": preparations, "seed": seeds},
                           description=f"void ratio against preparation of the soil card {card.path}")
     planned, series, _ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed,
                                    columns=CELL_SERIES)
@@ -158,6 +163,20 @@ def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: P
                 if p.case.preparation == prep and p.case_id in series]
         e.append(float(np.mean(vals)) if vals else float("nan"))
     return preparations, np.asarray(e)
+
+
+def _mapped(path: Path, case: dict, seeds: list[int]) -> list[float]:
+    """The preparations the map file at `path` already lists, if it is a map of the same case and
+    seeds (another card, or other seeds, start a map of their own)."""
+    import tomllib
+
+    if not path.exists():
+        return []
+    data = tomllib.loads(path.read_text())
+    sweep = data.get("sweep", {})
+    if data.get("case") != tomllib.loads(tomli_w.dumps({"case": case}))["case"] or sweep.get("seed") != seeds:
+        return []
+    return [float(p) for p in sweep.get("preparation", [])]
 
 
 def _append(card: SoilCard, table: dict) -> bool:
