@@ -376,3 +376,20 @@ def test_the_model_against_laboratory_figures_draw(tmp_path):
              "psi_max_deg_lo": 15.0, "psi_max_deg_hi": 19.0}]
     files += angles_figure(rows, tmp_path / "angles")
     assert all(f.stat().st_size > 1000 for f in files)
+
+
+def test_the_cell_study_table_keeps_the_fields_it_groups_by():
+    """bench/cell_study.py on a committed study (docs/soils/grain_stiffness_stress): a --by field that
+    a CellResult also carries (preparation) names its group, not the result's own None."""
+    import importlib.util
+
+    import pandas as pd
+
+    spec = importlib.util.spec_from_file_location("cell_study", ROOT / "bench" / "cell_study.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    saved = ROOT / "docs" / "soils" / "grain_stiffness_stress"
+    summ, curves = pd.read_csv(saved / "summaries.csv", dtype={"case_id": str}), pd.read_parquet(saved / "cell_curves.parquet")
+    table = mod.ensembles(summ, curves, ["shear_modulus", "preparation"])
+    assert sorted(set(table["preparation"])) == [0.24, 0.2865, 0.3115, 0.4122]
+    assert (table["n_seeds"] == 3).all() and len(table) == 8
