@@ -393,3 +393,18 @@ def test_the_cell_study_table_keeps_the_fields_it_groups_by():
     table = mod.ensembles(summ, curves, ["shear_modulus", "preparation"])
     assert sorted(set(table["preparation"])) == [0.24, 0.2865, 0.3115, 0.4122]
     assert (table["n_seeds"] == 3).all() and len(table) == 8
+
+
+def test_a_cards_checks_print_as_one_row_per_record_the_fitted_one_first():
+    """bench/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, five records held out."""
+    import importlib.util
+    import tomllib
+
+    spec = importlib.util.spec_from_file_location("card_checks", ROOT / "bench" / "card_checks.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand.toml").read_text())
+    table = mod.markdown(card).splitlines()
+    assert len(table) == 2 + 1 + len(card["verification"]) and table[2].startswith("| TMD17 (fitted) |")
+    tmd13 = next(v for v in card["verification"] if v["record"] == "TMD13.dat")
+    assert f" / {tmd13['measured']['phi_peak_deg']:.1f} (" in next(r for r in table if r.startswith("| TMD13 |"))
