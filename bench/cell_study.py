@@ -59,8 +59,8 @@ def ensembles(summ: pd.DataFrame, curves: pd.DataFrame, by: list[str]) -> pd.Dat
             e0.append(float(c["e"].iloc[0]))
         r = cell_result(str(g["test"].iloc[0]), float(g["normal_stress"].iloc[0]), runs, e0)
         key = key if isinstance(key, tuple) else (key,)
-        rows.append({**r.to_dict(), **dict(zip(by, key)), "wall_s": float(g["elapsed"].mean())})   # the keys win: a
-        # CellResult has fields of its own by those names (preparation None)
+        # the group's keys last: a CellResult has fields of its own by some of those names (preparation)
+        rows.append({**r.to_dict(), **dict(zip(by, key)), "wall_s": float(g["elapsed"].mean())})
     return pd.DataFrame(rows)
 
 

@@ -86,7 +86,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
     prep, e = void_ratio_map(card, stress, seeds, **kw)
-    limits = lab_limits(float(e[prep.index(0.0)]), float(e[prep.index(1.0)]), card.lab_span)
+    limits = lab_limits(float(e[0]), float(e[-1]), card.lab_span)
     if relative_density is None:
         return None, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
@@ -96,7 +96,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
         guess = invert_map(prep, e, target)
         if guess in prep or len(prep) >= known + REFINE or np.min(np.abs(e - target)) <= E_TOL:
             return guess, limits
-        prep, e = void_ratio_map(card, stress, seeds, preparations=sorted({*prep, guess}), **kw)
+        prep, e = void_ratio_map(card, stress, seeds, also=[guess], **kw)
     return guess, limits
 
 
@@ -106,12 +106,10 @@ def own_relative_density(card: SoilCard, stress: float, seeds, preparation: floa
     `preparation` makes there: the void-ratio map with that point added (the same token runs
     `preparation_at` reads in `output`, so nothing runs twice)."""
     p = round(float(preparation), 4)
-    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], output=output,
-                             preparations=sorted({*PREPARATIONS, p}), executor=executor, jobs=jobs, stream=stream,
-                             rerun_failed=rerun_failed)
+    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], output=output, also=[p], executor=executor,
+                             jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     _finished(e, stress, output)
-    e_min, e_max = e[prep.index(0.0)], e[prep.index(1.0)]
-    return float((e_max - e[prep.index(p)]) / (e_max - e_min))
+    return float((e[-1] - e[prep.index(p)]) / (e[-1] - e[0]))
 
 
 def _finished(e, stress: float, output: Path) -> None:
@@ -142,17 +140,18 @@ def invert_map(prep, e, target: float) -> float:
 
 
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
-                   stream=None, rerun_failed: bool = False, preparations=PREPARATIONS) -> tuple[list, np.ndarray]:
+                   stream=None, rerun_failed: bool = False, also=()) -> tuple[list, np.ndarray]:
     """(preparations ascending, seed-mean e at the start of a token compression at `stress` for each):
-    `preparations` and every point the map in `output` already holds for the same grains and seeds (a
-    map only grows: a point measured once is never dropped); a preparation's runs have the same id in
-    every map that holds it, so a finer map reruns nothing."""
+    PREPARATIONS (so the first and last points are the limits, 0 and 1), the preparations in `also`,
+    and every point the map in `output` already holds for the same grains and seeds (a map only grows:
+    a point measured once is never dropped); a preparation's runs have the same id in every map that
+    holds it, so a finer map reruns nothing."""
     seeds = [int(s) for s in seeds]
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
     name = f"density-{card.name}-{stress / 1e3:g}kPa"
     path = Path(output) / f"{name}.toml"
-    preparations = sorted({*(float(p) for p in preparations), *_mapped(path, base, seeds)})
+    preparations = sorted({*PREPARATIONS, *(float(p) for p in also), *_mapped(path, base, seeds)})
     path = write_campaign(path, name=name, case=base, sweep={"preparation": preparations, "seed": seeds},
                           description=f"void ratio against preparation of the soil card {card.path}")
     planned, series, _ = run_cases(path, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed,
