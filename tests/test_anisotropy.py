@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from interphase.analysis.anisotropy import (
@@ -277,6 +277,7 @@ def test_lee_share_lowers_the_summed_angle_not_theta_r():
 
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(3, 200))
+@example(seed=8564, n=5)
 def test_mirror_with_shear_sign_gives_same_psi(seed, n):
     theta, fn, ft = random_contacts(seed, n)
     theta = np.mod(theta, np.pi)                         # surface contacts: upper half plane
@@ -291,8 +292,15 @@ def test_mirror_with_shear_sign_gives_same_psi(seed, n):
     assert back["stress_ratio"] == pytest.approx(a["stress_ratio"], rel=1e-12, abs=1e-15)
     t = tensor_method(m["nx"], m["nz"], m["fn"], m["ft"]).iloc[0]
     t0 = tensor_method(c["nx"], c["nz"], c["fn"], c["ft"]).iloc[0]
+    # a few contacts can make the fabric too anisotropic for the second-order model (seed 8564, n 5:
+    # a = 1.05): then both frames refuse the same way, with the same reason, and the fabric still mirrors
+    assert t["reason"] == t0["reason"]
+    assert _ang_close(t["theta_fabric_deg"], -t0["theta_fabric_deg"], tol=1e-6)
     for key in ("theta_n_deg", "theta_t_deg"):
-        assert _ang_close(t[key], -t0[key], tol=1e-6)
+        if t0["reason"]:
+            assert math.isnan(t[key]) and math.isnan(t0[key])
+        else:
+            assert _ang_close(t[key], -t0[key], tol=1e-6)
 
 
 # ---- degenerate input -----------------------------------------------------------------------
