@@ -13,7 +13,7 @@ from interphase.surface.builder import file_spec, from_spec
 from interphase.surface.filters import centerline, gaussian_filter
 from interphase.surface.mesh import write_stl
 from interphase.surface.profiles import random_profile, sawtooth, tile
-from interphase.surface.readers import read_profile
+from interphase.surface.readers import read_profile, read_scan
 from interphase.surface.spec import ProfileSpec
 
 D50 = 0.7e-3
@@ -34,6 +34,21 @@ def test_dektak_theta_a_cli_says_non_dilative(dektak_csv, capsys):
     assert "non-dilative" in out["reason"]
     assert out["max_tilt_deg"] < 2.0         # every trace normal within the 92° filter's 2°
     assert out["rnc"] < 0.01
+
+
+def test_a_file_read_again_is_the_same_scan_until_its_bytes_change(tmp_path):
+    """read_scan keeps the last scans by path, units and content: the same bytes give the same Scan
+    (read-only arrays, so no caller can change another's), new bytes or other units a new one."""
+    f = tmp_path / "p.txt"
+    f.write_text("0 0\n1 0.5\n2 0\n")
+    a = read_scan(f)
+    assert read_scan(f) is a and not a.heights.flags.writeable and not a.x.flags.writeable
+    with pytest.raises(ValueError):
+        a.heights[0] = 1.0
+    assert read_scan(f, units="um") is not a and read_scan(f, units="um").heights[1] == pytest.approx(0.5e-6)
+    f.write_text("0 0\n1 0.7\n2 0\n")
+    b = read_scan(f)
+    assert b is not a and b.heights[1] == pytest.approx(0.7e-3) and a.heights[1] == pytest.approx(0.5e-3)
 
 
 def test_plain_text_with_header_and_units(tmp_path):
