@@ -12,13 +12,18 @@
    Parquet footer) on an index rebuilt from scratch; then a status with every verdict cached (stat
    of the files only); then with one folder's table touched (that one verified again).
 
+4. Loading shipped campaigns that name an instrument file in many cases (group5.toml; the study
+   and its sequential rerun), each in a fresh process: CPU seconds of load_campaign, imports apart.
+
     .venv/bin/python bench/bench_campaign.py
     .venv/bin/python bench/bench_campaign.py status     # 3. only
+    .venv/bin/python bench/bench_campaign.py load       # 4. only
 """
 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -195,14 +200,37 @@ def _write(path: Path, text: str) -> Path:
     return path
 
 
+SHIPPED = ("group5.toml", "study.toml", "precision/study_sequential.toml")
+LOAD = """import json, sys, time
+from interphase.campaign.schema import load_campaign
+import SurfaceTopography  # noqa: F401  (its import is not the load's cost)
+t = time.process_time()
+c = load_campaign(sys.argv[1])
+print(json.dumps({"cases": len(c.cases), "cpu_s": round(time.process_time() - t, 3)}))
+"""
+
+
+def bench_load_shipped() -> dict:
+    root = Path(__file__).resolve().parents[1]
+    out = {}
+    for name in SHIPPED:
+        run = subprocess.run([sys.executable, "-c", LOAD, str(root / "campaigns" / name)], capture_output=True,
+                             text=True, check=True, env={**os.environ, "PYTHONPATH": str(root / "src")})
+        out[name] = json.loads(run.stdout)
+    return out
+
+
 def main() -> None:
     tmp = Path(tempfile.mkdtemp(prefix="bench-campaign-"))
     try:
-        if sys.argv[1:] == ["status"]:
+        if sys.argv[1:] == ["load"]:
+            res = {"load_shipped": bench_load_shipped()}
+        elif sys.argv[1:] == ["status"]:
             res = {"status_verify_400": bench_status_verify(tmp)}
         else:
             res = {"planning_10k": bench_planning(tmp), "runner_standin": bench_runner_standin(tmp),
-                   "local_pool_liggghts": bench_local_pool(tmp), "status_verify_400": bench_status_verify(tmp)}
+                   "local_pool_liggghts": bench_local_pool(tmp), "status_verify_400": bench_status_verify(tmp),
+                   "load_shipped": bench_load_shipped()}
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     json.dump(res, sys.stdout, indent=1)
