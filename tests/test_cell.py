@@ -319,8 +319,8 @@ def test_the_ottawa_target_grading_is_its_sieve_curve():
 @pytest.mark.liggghts
 def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_checks(tmp_path):
     """`campaign calibrate` on a target that names a laboratory record (campaign/calibrate_cell.py):
-    the quickest budget on 100 grains to 2 % of axial strain — a run of the machinery, not a soil: the
-    sand's target with the narrow grading of this file's cells (GRAINS, d50 0.14 mm as the sand's) for
+    the quickest budget on 100 grains at G 50 MPa to 2 % of axial strain — a run of the machinery, not a
+    soil: the sand's target with the narrow grading of this file's cells (GRAINS, d50 0.14 mm as the sand's) for
     its 12-size sieve curve, whose smallest grains (0.083 mm) set a time step ~1.4× shorter."""
     need_binary("liggghts")
     text = (ROOT / "soils" / "targets" / "karlsruhe-fine-sand.toml").read_text()
@@ -329,7 +329,8 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     text = text.replace(sieve, f"gradation = {{sizes = {list(GRAINS.sizes)}, fractions = {list(GRAINS.fractions)}}}")
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
     text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.4", "axial_strain = 0.02")
-    assert "phi_cs_deg = 33.1" in text and "axial_strain = 0.02" in text
+    text = text.replace("shear_modulus = 500e6", "shear_modulus = 50e6")     # the card's G takes 3x the steps
+    assert "phi_cs_deg = 33.1" in text and "axial_strain = 0.02" in text and "shear_modulus = 50e6" in text
     text += "\n[budget.quick]\nsamples = 2\n"
     target = tmp_path / "targets" / "tiny.toml"
     target.parent.mkdir()
