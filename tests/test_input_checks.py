@@ -80,8 +80,11 @@ def test_unstated_converged_settings_are_named(tmp_path):
 
 
 def test_a_soil_cards_fields_count_as_stated():
-    # the card's G (50 MPa) fills every case: no note may say it takes the 29 GPa default
+    # the card's G fills every case: no note may say it takes the 29 GPa default
+    import tomllib
+
     camp = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
     assert "shear_modulus" in camp.stated
     assert not [w for w in camp.warnings() if "convergence study" in w]
-    assert {c.case.shear_modulus for c in camp.cases} == {50e6}
+    card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand.toml").read_text())["soil"]
+    assert {c.case.shear_modulus for c in camp.cases} == {card["shear_modulus"]} != {29e9}
