@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from interphase.report.validation import markdown
+
 KEYS = ("friction_pp", "rolling_friction", "preparation")
 
 
@@ -37,10 +39,8 @@ def table(folder: Path) -> pd.DataFrame:
 
 def main(folder: str) -> None:
     t = table(Path(folder))
-    print("| " + " | ".join(t.columns) + " |\n|" + "---|" * len(t.columns))
-    for r in t.itertuples(index=False):
-        print("| " + " | ".join(f"{v:.4g}" if k in KEYS else f"{v:.2f}" if isinstance(v, float) else str(v)
-                                for k, v in zip(t.columns, r)) + " |")
+    shown = t.assign(**{k: t[k].map("{:.4g}".format) for k in KEYS})      # the grains' values to 4 digits
+    print(markdown(shown, {c: c for c in t.columns}))
     d = t["difference"]
     print(f"\n{len(t)} samples: ensemble − mean of maxima {d.mean():+.2f}° (sd {d.std():.2f}°, "
           f"{d.min():+.2f}° to {d.max():+.2f}°); correlation with the peak-strain gap "
