@@ -79,6 +79,21 @@ def test_unstated_converged_settings_are_named(tmp_path):
     assert load_campaign(camp).warnings() == []
 
 
+def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
+    """campaigns/real_sand/stiffness_3d_soft.toml copies the 3D card's grains (a card is not
+    overridden field by field): its cases are the card file's, case for case, but for G."""
+    def cases(name):
+        camp = load_campaign(ROOT / "campaigns" / "real_sand" / name)
+        return {(x.role, x.case.seed): x.case.canonical() for x in camp.cases}
+
+    card, soft = cases("stiffness_3d_card.toml"), cases("stiffness_3d_soft.toml")
+    assert card.keys() == soft.keys() and len(card) == 6
+    for k in card:
+        diff = {f for f in card[k] if card[k][f] != soft[k].get(f)} | (soft[k].keys() - card[k].keys())
+        assert diff == {"shear_modulus"}, (k, diff)
+        assert (card[k]["shear_modulus"], soft[k]["shear_modulus"]) == (500e6, 50e6)
+
+
 def test_a_soil_cards_fields_count_as_stated():
     # the card's G fills every case: no note may say it takes the 29 GPa default
     import tomllib
