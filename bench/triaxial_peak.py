@@ -125,8 +125,7 @@ def measure(curves: pd.DataFrame, draws: int, seed: int, base: float) -> pd.Data
     residV = V - BV
     psi_truth = np.array([psi_from_rate(np.nanmax(-window_slopes(grid, v, WINDOW)[1])) for v in BV])
     ids = curves.drop_duplicates("case_id").set_index("case_id").loc[runs]
-    groups = [np.flatnonzero(m) for _, m in ids.groupby(GROUP).indices.items()] if False else \
-        [np.asarray(v) for v in ids.reset_index().groupby(GROUP).indices.values()]
+    groups = [np.asarray(v) for v in ids.reset_index().groupby(GROUP).indices.values()]
     rows = []
     for n in (2, 3, 5):
         usable = [g for g in groups if len(g) >= n]
