@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import platform
 import sys
 from pathlib import Path
@@ -44,6 +45,8 @@ import numpy as np
 import pandas as pd
 from scipy.signal import savgol_filter
 
+from interphase.analysis.cell_ensemble import GRID_STEP as STEP
+from interphase.analysis.cell_ensemble import cell_result
 from interphase.analysis.ensemble import peak_values
 from interphase.analysis.strength import moving_average
 from interphase.analysis.triaxial import WINDOW, friction_angle, psi_from_rate, window_slopes
@@ -51,7 +54,6 @@ from interphase.report.validation import markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 CURVES = ROOT / "docs" / "soils" / "karlsruhe-fine-sand" / "triaxial_curves.parquet"
-STEP = 0.001          # [-] the grid of ε1 (analysis.cell_ensemble.GRID_STEP)
 END = 0.15            # [-] the curves are compared up to this ε1 (every run reaches it)
 BASE = 0.03           # [-] the Savitzky–Golay window that defines a specimen's fluctuation-free hump
 GROUP = ["shear_modulus", "normal_stress", "friction_pp", "rolling_friction", "preparation", "n_grains"]
@@ -92,13 +94,9 @@ def _smooth(R: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
 def psi_candidates(V: np.ndarray, grid: np.ndarray) -> dict[str, float]:
     """Each estimator's ψ_max [°] of the seeds' εv `V` (n, m): the rate over the seed-mean curve's
     window of largest dilation (the tool before this bench), or each seed's own largest."""
-    starts, slopes = window_slopes(grid, V.mean(0), WINDOW)
-    j = int(np.nanargmax(-slopes))
-    inside = (grid >= starts[j]) & (grid <= starts[j] + WINDOW)
-    at_mean = -np.array([np.polyfit(grid[inside], v[inside], 1)[0] for v in V])
+    tool = cell_result("triaxial", math.nan, [(grid, v, np.ones_like(grid)) for v in V], [math.nan] * len(V))
     own = np.array([np.nanmax(-window_slopes(grid, v, WINDOW)[1]) for v in V])
-    return {"ψ: mean curve's window": float(psi_from_rate(at_mean.mean())),
-            "ψ: per-seed max": float(psi_from_rate(own.mean()))}
+    return {"ψ: mean curve's window": tool.psi_max_deg, "ψ: per-seed max": float(psi_from_rate(own.mean()))}
 
 
 def candidates(R: np.ndarray, grid: np.ndarray) -> dict[str, float]:

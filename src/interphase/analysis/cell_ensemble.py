@@ -5,7 +5,7 @@ curves, intervals from the seeds.
 Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compression positive):
   - the seed-mean curves: each seed's R(ε1) and εv(ε1) interpolated on a common grid of GRID_STEP
     up to the shortest run's ε1, R smoothed over SMOOTH_EPS1 (analysis.cell_run), averaged over the
-    seeds; `shear_state` of those curves gives ε1 at peak, ψ_max and the end state.
+    seeds; `shear_state` of those curves gives ψ_max's window and the end state.
   - φ_peak: each seed's own maximum of its smoothed R, as the laboratory reads each specimen, the
     mean of those values mapped through asin((R − 1)/(R + 1)), interval Student t on them; ε1 at
     peak the mean of the seeds' own peak strains. Not the seed-mean curve's maximum, nor the
