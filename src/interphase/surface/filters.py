@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from interphase.errors import InputError
 from interphase.surface.base import Profile
@@ -41,6 +40,8 @@ def gaussian_filter(profile: Profile, cutoff: float, keep: str = "roughness") ->
     uni = resample(profile, dx)
     alpha = math.sqrt(math.log(2) / math.pi)
     sigma = alpha * cutoff / math.sqrt(2 * math.pi) / (uni.x[1] - uni.x[0])
+    from scipy.ndimage import gaussian_filter1d   # here, not at the top: every engine worker imports this module
+
     wav = gaussian_filter1d(uni.z, sigma, mode="wrap" if profile.periodic else "reflect")
     z = uni.z - wav if keep == "roughness" else wav
     return Profile(uni.x, z, profile.periodic, profile.name)
