@@ -240,9 +240,10 @@ def test_density_measures_the_grains_own_limits_and_never_overwrites_them(densit
 @pytest.mark.liggghts
 def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
     card, _, out = density_card
-    # TMD17's σ3′ and Dr0 (e0 0.7582 on e_min 0.677, e_max 1.054), in the folder the record test below
-    # uses: its runs are these (the same ids)
-    dr = (1.054 - 0.7582) / (1.054 - 0.677)
+    # TMD17's σ3′ and Dr0 (e0 0.758169085, its first row, on e_min 0.677, e_max 1.054), in the folder the
+    # record test below uses: to every digit the record's Dr, so that its map point and runs are these
+    # (the same ids)
+    dr = (1.054 - 0.758169085) / (1.054 - 0.677)
     cmd = [sys.executable, "-m", "interphase.cli", "element", str(card), "--test", "triaxial", "--confining-stress",
            "100e3", "--relative-density", repr(dr), "--seeds", "2", "--runs", str(card.parent / "element"),
            "--report", str(tmp_path / "report"), "--json"]

@@ -47,3 +47,25 @@ def test_a_map_keeps_the_points_measured_before_for_the_same_grains_and_seeds(tm
     assert _mapped(path, case, [1, 2]) == [0.0, 0.3115, 1.0]
     assert _mapped(path, case, [3, 4]) == []                                  # other seeds: a map of their own
     assert _mapped(path, {**case, "friction_pp": 0.5}, [1, 2]) == []           # other grains, likewise
+
+
+def test_a_picked_preparation_is_kept_for_its_map_and_dropped_with_other_grains_or_seeds(tmp_path):
+    """The preparation a Dr was read at is recorded beside the map and returned as it is by later
+    calls on the same map (campaign/density.py `_Picks`), so a record read again (more seeds, its
+    report) shears the specimens it sheared before; another card's grains or other map seeds start
+    afresh."""
+    from interphase.campaign.density import _Picks
+
+    case = {"test": "triaxial", "n_grains": 150, "friction_pp": 0.43, "normal_stress": 100e3,
+            "gradation": {"sizes": [1e-4, 2e-4], "fractions": [0.5, 0.5]}}
+    path = tmp_path / "density-x-100kPa.toml"
+    first = _Picks(path, case, [1, 2])
+    assert first.get(0.7847) is None
+    first.put(0.7847, 0.1115)
+    assert _Picks(path, case, [1, 2]).get(0.7847) == 0.1115
+    assert _Picks(path, case, [1, 2]).get(0.63) is None                         # another Dr: not picked yet
+    assert _Picks(path, case, [3, 4]).get(0.7847) is None                       # other map seeds
+    assert _Picks(path, {**case, "friction_pp": 0.5}, [1, 2]).get(0.7847) is None   # other grains
+    again = _Picks(path, case, [1, 2])
+    again.put(0.63, 0.2269)
+    assert _Picks(path, case, [1, 2]).picks == {"0.784700": 0.1115, "0.630000": 0.2269}
