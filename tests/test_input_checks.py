@@ -79,6 +79,9 @@ def test_unstated_converged_settings_are_named(tmp_path):
     assert load_campaign(camp).warnings() == []
 
 
+GRAIN_FIELDS = {"d50", "density", "shear_modulus", "friction_pp", "rolling_friction", "preparation", "gradation"}
+
+
 def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
     """campaigns/real_sand/stiffness_3d_soft.toml copies the 3D card's grains (a card is not
     overridden field by field): its cases are the card file's, case for case, but for G."""
@@ -92,13 +95,19 @@ def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
         diff = {f for f in card[k] if card[k][f] != soft[k].get(f)} | (soft[k].keys() - card[k].keys())
         assert diff == {"shear_modulus"}, (k, diff)
         assert (card[k]["shear_modulus"], soft[k]["shear_modulus"]) == (500e6, 50e6)
+    # the cell study runs on the same softened grains
+    grains = {f: v for f, v in next(iter(soft.values())).items() if f in GRAIN_FIELDS}
+    assert grains.keys() == GRAIN_FIELDS
+    cell = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
+    for x in cell.cases:
+        assert {f: v for f, v in x.case.canonical().items() if f in GRAIN_FIELDS} == grains
 
 
 def test_a_soil_cards_fields_count_as_stated():
     # the card's G fills every case: no note may say it takes the 29 GPa default
     import tomllib
 
-    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
+    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "stiffness_3d_card.toml")
     assert "shear_modulus" in camp.stated
     assert not [w for w in camp.warnings() if "convergence study" in w]
     card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand.toml").read_text())["soil"]
