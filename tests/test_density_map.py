@@ -60,12 +60,13 @@ def test_a_picked_preparation_is_kept_for_its_map_and_dropped_with_other_grains_
             "gradation": {"sizes": [1e-4, 2e-4], "fractions": [0.5, 0.5]}}
     path = tmp_path / "density-x-100kPa.toml"
     first = _Picks(path, case, [1, 2])
-    assert first.get(0.7847) is None
-    first.put(0.7847, 0.1115)
-    assert _Picks(path, case, [1, 2]).get(0.7847) == 0.1115
-    assert _Picks(path, case, [1, 2]).get(0.63) is None                         # another Dr: not picked yet
-    assert _Picks(path, case, [3, 4]).get(0.7847) is None                       # other map seeds
-    assert _Picks(path, {**case, "friction_pp": 0.5}, [1, 2]).get(0.7847) is None   # other grains
+    assert first.get(0.7847, 1.0) is None
+    first.put(0.7847, 1.0, 0.1115)
+    assert _Picks(path, case, [1, 2]).get(0.7847, 1.0) == 0.1115
+    assert _Picks(path, case, [1, 2]).get(0.63, 1.0) is None                      # another Dr: not picked yet
+    assert _Picks(path, case, [1, 2]).get(0.7847, 0.64) is None                   # another density scale
+    assert _Picks(path, case, [3, 4]).get(0.7847, 1.0) is None                    # other map seeds
+    assert _Picks(path, {**case, "friction_pp": 0.5}, [1, 2]).get(0.7847, 1.0) is None   # other grains
     again = _Picks(path, case, [1, 2])
-    again.put(0.63, 0.2269)
-    assert _Picks(path, case, [1, 2]).picks == {"0.784700": 0.1115, "0.630000": 0.2269}
+    again.put(0.63, 1.0, 0.2269)
+    assert sorted(_Picks(path, case, [1, 2]).picks.values()) == [0.1115, 0.2269]

@@ -78,8 +78,8 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     than asked (Dr 0.03-0.05 less, measured). Up to REFINE times, the preparation read off the map is
     measured itself (the same token runs) and the map read again, until that point's e is within
     E_TOL of the target. Points an earlier call measured in `output` stay on the map
-    (`void_ratio_map`), and the preparation picked for a Dr is recorded beside the map (`_picks`) and
-    returned as it is by every later call on that map: on a noisy map each refinement moves the
+    (`void_ratio_map`), and the preparation picked for a Dr (on the card's lab_span) is recorded
+    beside the map (`_Picks`) and returned as it is by every later call on that map: on a noisy map each refinement moves the
     inverse a little (150 grains at 100 kPa: 0.1102, 0.1163, 0.1115, 0.1105, 0.1104 in turn), and a
     Dr read again must not make new specimens and rerun the seeds already sheared on the first."""
     from interphase.errors import InputError
@@ -94,7 +94,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     if relative_density is None:
         return None, limits
     picks = _Picks(*_map_file(card, stress, test, output), seeds)
-    if (picked := picks.get(relative_density)) is not None:
+    if (picked := picks.get(relative_density, card.lab_span)) is not None:
         return picked, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
     known = len(prep)
@@ -104,7 +104,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
         if guess in prep or len(prep) >= known + REFINE or np.min(np.abs(e - target)) <= E_TOL:
             break
         prep, e = void_ratio_map(card, stress, seeds, also=[guess], **kw)
-    picks.put(relative_density, guess)
+    picks.put(relative_density, card.lab_span, guess)
     return guess, limits
 
 
@@ -179,7 +179,8 @@ def _map_file(card: SoilCard, stress: float, test, output: Path) -> tuple[Path, 
 
 class _Picks:
     """The preparation picked for each relative density on one map, in a JSON file beside the map's
-    campaign file; kept only while it belongs to the same grains and seeds (as `_mapped` keeps points)."""
+    campaign file, keyed by the Dr and the lab_span it was read on (together they fix the target e on
+    the map); kept only while it belongs to the same grains and seeds (as `_mapped` keeps points)."""
 
     def __init__(self, map_path: Path, case: dict, seeds):
         self.path = map_path.with_suffix(".picks.json")
@@ -187,11 +188,15 @@ class _Picks:
         data = json.loads(self.path.read_text()) if self.path.exists() else {}
         self.picks = data.get("picks", {}) if {k: data.get(k) for k in self.key} == self.key else {}
 
-    def get(self, relative_density: float) -> float | None:
-        return self.picks.get(f"{relative_density:.6f}")
+    @staticmethod
+    def _key(relative_density: float, lab_span: float) -> str:
+        return f"Dr {relative_density:.6f} on lab_span {lab_span:.6f}"
 
-    def put(self, relative_density: float, preparation: float) -> None:
-        self.picks[f"{relative_density:.6f}"] = preparation
+    def get(self, relative_density: float, lab_span: float) -> float | None:
+        return self.picks.get(self._key(relative_density, lab_span))
+
+    def put(self, relative_density: float, lab_span: float, preparation: float) -> None:
+        self.picks[self._key(relative_density, lab_span)] = preparation
         self.path.write_text(json.dumps({**self.key, "picks": self.picks}, indent=1) + "\n")
 
 
