@@ -79,9 +79,10 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     measured itself (the same token runs) and the map read again, until that point's e is within
     E_TOL of the target. Points an earlier call measured in `output` stay on the map
     (`void_ratio_map`), and the preparation picked for a Dr (on the card's lab_span) is recorded
-    beside the map (`_Picks`) and returned as it is by every later call on that map: on a noisy map each refinement moves the
-    inverse a little (150 grains at 100 kPa: 0.1102, 0.1163, 0.1115, 0.1105, 0.1104 in turn), and a
-    Dr read again must not make new specimens and rerun the seeds already sheared on the first."""
+    beside the map (`_Picks`) and returned as it is by every later call on that map: on a noisy map
+    each refinement moves the inverse a little (150 grains at 100 kPa: 0.1102, 0.1163, 0.1115, 0.1105,
+    0.1104 in turn), and a Dr read again must not make new specimens and rerun the seeds already
+    sheared on the first."""
     from interphase.errors import InputError
 
     if relative_density is not None and not 0 <= relative_density <= 1:
