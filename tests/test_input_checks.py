@@ -11,6 +11,7 @@ import pytest
 from interphase.campaign.plan import plan
 from interphase.campaign.schema import load_campaign
 from interphase.cli import main
+from interphase.soil import SOIL_FIELDS
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = '[case]\ntest = "interface"\nprofile = {kind = "sawtooth", rt = 1, sw = 2, sr = 0}\n'
@@ -79,9 +80,6 @@ def test_unstated_converged_settings_are_named(tmp_path):
     assert load_campaign(camp).warnings() == []
 
 
-GRAIN_FIELDS = {"d50", "density", "shear_modulus", "friction_pp", "rolling_friction", "preparation", "gradation"}
-
-
 def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
     """campaigns/real_sand/stiffness_3d_soft.toml copies the 3D card's grains (a card is not
     overridden field by field): its cases are the card file's, case for case, but for G."""
@@ -96,11 +94,11 @@ def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
         assert diff == {"shear_modulus"}, (k, diff)
         assert (card[k]["shear_modulus"], soft[k]["shear_modulus"]) == (500e6, 50e6)
     # the cell study runs on the same softened grains
-    grains = {f: v for f, v in next(iter(soft.values())).items() if f in GRAIN_FIELDS}
-    assert grains.keys() == GRAIN_FIELDS
+    grains = {f: v for f, v in next(iter(soft.values())).items() if f in SOIL_FIELDS}
+    assert grains.keys() == set(SOIL_FIELDS)
     cell = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
     for x in cell.cases:
-        assert {f: v for f, v in x.case.canonical().items() if f in GRAIN_FIELDS} == grains
+        assert {f: v for f, v in x.case.canonical().items() if f in SOIL_FIELDS} == grains
 
 
 def test_a_soil_cards_fields_count_as_stated():
