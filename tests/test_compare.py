@@ -92,3 +92,32 @@ def test_campaign_compare_cli_prints_and_writes_the_table(quick_campaign, tmp_pa
     assert "tan_delta" in text and "change +0" in text
     t = pd.read_csv(out)
     assert {"case", "metric", "change_lo", "change_hi", "verdict"} <= set(t.columns) and len(t) >= 8
+
+
+@pytest.mark.liggghts
+def test_campaign_compare_by_a_field_compares_one_campaigns_cells_without_pooling_them(quick_campaign, tmp_path,
+                                                                                       capsys):
+    """--by splits one campaign's runs into cells by a field's value (here the seed: every physical
+    case has one run in each cell) and reads each cell's ensembles, E from its own soil tests."""
+    from interphase.campaign.results import open_campaign
+    from interphase.cli import main
+
+    out = tmp_path / "cells.csv"
+    assert main(["compare", str(quick_campaign), "--by", "seed=1", "--out", str(out)]) == 0
+    assert "reference cell: seed=1" in capsys.readouterr().out
+    t = pd.read_csv(out)
+    assert set(t["variant"]) == {"seed=2"} and (t["n_ref"] == 1).all() and (t["n_value"] == 1).all()
+    _, store, summ = open_campaign(quick_campaign)
+    try:
+        one, two = (seed_values(summ[summ["seed"].eq(s)], store) for s in (1, 2))
+    finally:
+        store.close()
+    e = t[t["metric"].eq("E")].set_index("case")
+    assert len(e) == 2
+    for case, row in e.iterrows():
+        assert row["ref"] == pytest.approx(float(one.loc[one["case"].eq(case), "E"].iloc[0]))
+        assert row["change"] == pytest.approx(float(two.loc[two["case"].eq(case), "E"].iloc[0]) - row["ref"])
+    for args, says in ((["--by", "seed=7"], "seed=1; seed=2"), (["--by", "box_depth=3"], "no such field"),
+                       ([str(quick_campaign), "--by", "seed=1"], "not both nor neither"), ([], "not both nor neither")):
+        assert main(["compare", str(quick_campaign), *args]) == 2
+        assert says in capsys.readouterr().err

@@ -526,9 +526,14 @@ def _add_report(sub) -> None:
 
 def _add_compare(sub) -> None:
     p = sub.add_parser("compare", help="what one changed setting does: two campaigns' physical cases compared "
-                       "on seed ensembles (agree / differ / undecided)")
+                       "on seed ensembles (agree / differ / undecided); or one campaign's cells (--by)")
     p.add_argument("reference", help="campaign file (TOML) of the reference settings")
-    p.add_argument("variant", help="campaign file (TOML) that changes one setting")
+    p.add_argument("variant", nargs="?", default=None,
+                   help="campaign file (TOML) that changes one setting (not with --by)")
+    p.add_argument("--by", action="append", default=[], metavar="FIELD=VALUE",
+                   help="compare within one campaign: split its runs by FIELD (a case field its sweep varies "
+                        "and its labels do not name, e.g. box_depth_d50), the cell with FIELD=VALUE the "
+                        "reference; repeat for several fields")
     p.add_argument("-o", "--output", "--out", dest="output", default=None, metavar="CSV",
                    help="also write the table to this CSV file")
     p.add_argument("--json", action="store_true", help="print JSON rows")
@@ -536,17 +541,29 @@ def _add_compare(sub) -> None:
 
 
 def _cmd_compare(args) -> int:
-    from interphase.campaign.compare import compare_campaigns
+    from interphase.campaign.compare import compare_campaigns, compare_within
 
-    table = compare_campaigns(args.reference, args.variant)
+    if bool(args.variant) == bool(args.by):
+        raise InputError("compare needs a second campaign file or --by FIELD=VALUE, not both nor neither",
+                         where=f"campaign compare {args.reference}",
+                         fix="campaign compare REF.toml VARIANT.toml, or campaign compare CAMPAIGN.toml "
+                             "--by box_depth_d50=10")
+    if args.by:
+        table = compare_within(args.reference, _by_fields(args.by))
+        where, paths = f"{args.reference}, {' '.join(args.by)}", (args.reference,)
+    else:
+        table = compare_campaigns(args.reference, args.variant)
+        where, paths = f"{args.reference}, {args.variant}", (args.reference, args.variant)
     if table.empty:
-        raise InputError("no physical case finished in both campaigns", where=f"{args.reference}, {args.variant}",
+        raise InputError("no physical case finished on both sides", where=where,
                          fix="labels must match apart from the seed: vary only what the label does not name")
     if args.output:
         table.to_csv(_output_path(args.output), index=False)
     if not args.json:
-        for path in (args.reference, args.variant):
+        for path in paths:
             print(f"read the runs of {path} in {_runs_folder(path)}")
+        if args.by:
+            print(f"reference cell: {table.attrs['reference']}")
     if args.json:
         _print_json(table.to_dict(orient="records"))
         return 0
@@ -556,10 +573,26 @@ def _cmd_compare(args) -> int:
             n = r.seeds_needed
             need = (f" (≈{int(n)} seeds per side would decide)" if n is not None and n == n
                     else " (no seed count within reach decides it at this scatter)")
-        print(f"{r.case}  {r.metric}: {r.ref:.4g} ({r.ref_lo:.4g}–{r.ref_hi:.4g}) → {r.value:.4g} "
+        cell = f"[{r.variant}] " if args.by else ""
+        print(f"{cell}{r.case}  {r.metric}: {r.ref:.4g} ({r.ref_lo:.4g}–{r.ref_hi:.4g}) → {r.value:.4g} "
               f"({r.value_lo:.4g}–{r.value_hi:.4g}); change {r.change:+.4g} ({r.change_lo:+.4g} to {r.change_hi:+.4g}) "
               f"vs ±{r.tol:.3g}: {r.verdict}{need}")
     return 0
+
+
+def _by_fields(items: list[str]) -> dict[str, float]:
+    """--by FIELD=VALUE arguments as {field: value}."""
+    out = {}
+    for item in items:
+        field, sep, value = item.partition("=")
+        try:
+            out[field.strip()] = float(value)
+        except ValueError:
+            raise InputError(f"--by {item}: not FIELD=VALUE with a number", where="campaign compare",
+                             fix="e.g. --by box_depth_d50=10") from None
+        if not sep or not field.strip():
+            raise InputError(f"--by {item}: not FIELD=VALUE", where="campaign compare", fix="e.g. --by box_depth_d50=10")
+    return out
 
 
 def _runs_folder(campaign_path: str, runs: str | None = None):

@@ -2,7 +2,10 @@
 against the seed scatter (analysis.difference: agree / differ / undecided at a tolerance).
 
 Physical cases are matched by label without the seed (`…-s3`), so the two campaigns must differ only
-in what the labels do not name (stiffness, speed, box size, rolling friction, damping …). Per-seed
+in what the labels do not name (stiffness, speed, box size, rolling friction, damping …).
+`campaign compare CAMPAIGN --by FIELD=VALUE …` does the same within one campaign whose sweep varies
+such fields (a cell-size study): its runs are split into cells by the named fields' values, and every
+cell is compared with the one where each field has the VALUE given (`compare_cells`). Per-seed
 values, each at its own ensemble's reading (analysis.ensemble):
   tan_delta, tan_phi        the seed's leave-one-out peak value: its smoothed ratio where the mean
                             curve of its ensemble's OTHER seeds peaks (analysis.ensemble.peak_values;
@@ -26,6 +29,7 @@ import pandas as pd
 from interphase.analysis.difference import difference
 from interphase.analysis.ensemble import physical_case, seed_states
 from interphase.analysis.strength import PEAK_WINDOW_D50
+from interphase.errors import InputError
 
 # what a change must stay within to count as "no effect" (docs/convergence.md says why)
 TOLERANCES = {"tan_delta": 0.03, "tan_delta_cs": 0.03, "tan_phi": 0.03, "tan_phi_cs": 0.03,
@@ -86,6 +90,45 @@ def compare(ref: pd.DataFrame, variant: pd.DataFrame, tolerances: dict | None = 
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
+def _cell_name(fields, key) -> str:
+    return ", ".join(f"{f}={v:g}" for f, v in zip(fields, key))
+
+
+def compare_cells(summaries: pd.DataFrame, store, by: dict[str, float], where: str = "",
+                  tolerances: dict | None = None) -> pd.DataFrame:
+    """Each cell of one campaign's runs (the runs sharing the values of the `by` fields, columns of
+    the summaries) against the reference cell (each field at its value in `by`): the `compare` table
+    with a first column `variant` naming the cell. Seed values are read within each cell (its own
+    ensembles and its own soil tests for E), so that one label's runs in two cells are never pooled."""
+    fields = list(by)
+    missing = [f for f in fields if f not in summaries.columns]
+    if missing:
+        raise InputError(f"--by {missing[0]}: no such field in the runs' summaries", where=where,
+                         fix="name a case field the campaign sweeps, e.g. --by box_depth_d50=10")
+    num = summaries[fields].apply(pd.to_numeric, errors="coerce")
+    if num.isna().any().any():
+        bad = [f for f in fields if num[f].isna().any()]
+        raise InputError(f"--by {bad[0]}: not a number on every run", where=where,
+                         fix="split by a numeric case field (box size, stiffness, speed …)")
+    groups = {(k if isinstance(k, tuple) else (k,)): g
+              for k, g in summaries.groupby([num[f].round(9) for f in fields], sort=True)}
+    ref_key = tuple(round(float(by[f]), 9) for f in fields)
+    cells = list(groups)
+    if ref_key not in cells:
+        raise InputError(f"no finished run has {_cell_name(fields, ref_key)}", where=where,
+                         fix="the reference cell's values are among: "
+                             + "; ".join(_cell_name(fields, k) for k in cells))
+    if len(cells) < 2:
+        raise InputError(f"every finished run has {_cell_name(fields, ref_key)}: nothing to compare",
+                         where=where, fix="name the fields the campaign varies")
+    values = {k: seed_values(g, store) for k, g in groups.items()}
+    frames = [compare(values[ref_key], values[k], tolerances).assign(variant=_cell_name(fields, k))
+              for k in cells if k != ref_key]
+    out = pd.concat(frames, ignore_index=True)
+    out.attrs["reference"] = _cell_name(fields, ref_key)
+    return out[["variant", *COLUMNS]]
+
+
 def compare_campaigns(ref_path: str | Path, variant_path: str | Path, tolerances: dict | None = None) -> pd.DataFrame:
     """Open both campaigns' finished runs and `compare` them."""
     from interphase.campaign.results import open_campaign
@@ -98,3 +141,14 @@ def compare_campaigns(ref_path: str | Path, variant_path: str | Path, tolerances
         finally:
             store.close()
     return compare(*frames, tolerances)
+
+
+def compare_within(campaign_path: str | Path, by: dict[str, float], tolerances: dict | None = None) -> pd.DataFrame:
+    """Open one campaign's finished runs and `compare_cells` them."""
+    from interphase.campaign.results import open_campaign
+
+    _, store, summ = open_campaign(campaign_path)
+    try:
+        return compare_cells(summ, store, by, where=str(campaign_path), tolerances=tolerances)
+    finally:
+        store.close()
