@@ -25,28 +25,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.ensemble import ratio_interval
-from interphase.campaign.compare import seed_values
+sys.path.insert(0, str(Path(__file__).parent))
+from sequential_coverage import _Curves  # noqa: E402
+
+from interphase.analysis.ensemble import ratio_interval  # noqa: E402
+from interphase.campaign.compare import seed_values  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMITTED = ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "cell"
 CELL = ["box_depth_d50", "box_length_d50"]
 CASES = 18          # Group 1: 6 heights × 3 frictions
-
-
-class _Curves:
-    """store.curve() from a committed curves table."""
-
-    def __init__(self, path: Path):
-        c = pd.read_parquet(path)
-        self.by_id = {cid: (g["shear_disp"].to_numpy(float), g["stress_ratio"].to_numpy(float))
-                      for cid, g in c.groupby("case_id", sort=False)}
-
-    def curve(self, cid):
-        return self.by_id.get(str(cid))
-
-    def close(self):
-        pass
 
 
 def open_runs(campaign: Path):
@@ -116,7 +104,7 @@ def main(argv=None) -> int:
     try:
         per, cells = table(summ, store)
     finally:
-        store.close()
+        getattr(store, "close", lambda: None)()
     print(_md(per))
     print()
     print(_md(cells) if not cells.empty else "no cell has both tests at ≥ 2 seeds and an interface case")
