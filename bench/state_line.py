@@ -1,5 +1,5 @@
 """Strength against dilatancy: the card's spheres from dense to loose beside the sand's 15 records
-(docs/soils.md, "Density is not the lever"), as Markdown, a CSV and a figure.
+(docs/soils.md, "From dense to loose: the state line"), as Markdown, a CSV and a figure.
 
     PYTHONPATH=src python bench/state_line.py campaigns/soils/state_line.toml \
         --records lab/soils/karlsruhe-fine-sand/drained-triaxial --save docs/soils/state_line
