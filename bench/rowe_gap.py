@@ -2,7 +2,7 @@
 its peak, the Karlsruhe fine sand's records against spheres of its grading at G 500 MPa
 (docs/soils.md, "Karlsruhe fine sand", the paragraph "In Rowe's terms").
 
-    PYTHONPATH=src python bench/rowe_gap.py
+    PYTHONPATH=src python bench/rowe_gap.py [--cells docs/soils/kfs_best_sample]
 
 From committed data only (no engine). Rowe (1962) in triaxial compression: σ1′/σ3′ = K (1 + r),
 r = −dεv/dε1, K = tan²(45° + φ_f/2). Per specimen:
@@ -15,11 +15,15 @@ r = −dεv/dε1, K = tan²(45° + φ_f/2). Per specimen:
   angle at the end (the sand: its published φ_c 33.1°; the samples of the present fit,
   calibration_samples.csv: their angle at 40 % of ε1, a critical state), and that gap's linear
   dependence on the free parameters over the 20 samples (least squares, 95 % intervals).
+--cells FOLDER adds, per grain set (friction, rolling friction, preparation) of a cell campaign's
+committed copy (bench/cell_study.py --save: summaries.csv, cell_curves.parquet to 40 % of ε1), the
+same readings per specimen with 95 % intervals over its seeds, the end angle its own at 40 %.
 A measurement: exit 0 whatever it finds.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from pathlib import Path
@@ -52,7 +56,29 @@ def mean_ci(v) -> str:
     return f"{v.mean():.2f} ({v.mean() - h:.2f} to {v.mean() + h:.2f}), sd {v.std(ddof=1):.2f}, n {v.size}"
 
 
-def main() -> int:
+def grain_sets(folder: Path) -> None:
+    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str})
+    curves = pd.read_parquet(folder / "cell_curves.parquet")
+    keys = [k for k in ("friction_pp", "rolling_friction", "preparation") if k in summ]
+    rows = []
+    for _, r in summ.iterrows():
+        c = curves[curves["case_id"] == r["case_id"]].sort_values("eps1")
+        rows.append({**{k: r[k] for k in keys}, **state_row(c["eps1"].to_numpy(), c["epsv"].to_numpy(),
+                                                             c["ratio"].to_numpy(), c["e"].to_numpy())})
+    runs = pd.DataFrame(rows)
+    runs["gap"] = phi_f_at_psi_max(runs["phi_peak_deg"], runs["psi_max_deg"]) - runs["phi_end_deg"]
+    runs["lag"] = 100 * (runs["eps1_psi"] - runs["eps1_peak"])
+    for key, g in runs.groupby(keys):
+        print(f"\n{dict(zip(keys, key))}")
+        for col, name in (("phi_f_deg", "φ_f at the peak [°]"), ("lag", "ε1 at ψ_max − at the peak [%]"),
+                          ("gap", "φ_f (with ψ_max) − φ at the end [°]")):
+            print(f"  {name}: {mean_ci(g[col])}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cells", type=Path, default=None, help="a cell campaign's committed copy (bench/cell_study.py --save)")
+    args = ap.parse_args(argv)
     sand = record_rows(RECORDS)
     curves = pd.read_parquet(CARD / "triaxial_curves.parquet")
     runs = []
@@ -90,6 +116,8 @@ def main() -> int:
     near = s.assign(phi_f_gap=gap).sort_values("phi_f_gap").head(3)
     print("  the samples nearest the sand's gap:")
     print(near[names + ["phi_peak_deg", "psi_max_deg", "phi_cs_deg", "phi_f_gap", "seeds"]].round(3).to_string(index=False))
+    if args.cells:
+        grain_sets(args.cells)
     return 0
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -211,6 +212,8 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     assert check["difference"] == pytest.approx(check["measured"] - 37.0)
     runs = tmp_path / "runs" / "calibrate" / "tiny-quick"
     assert (runs / "element").is_dir() and (runs / "samples-quick.csv").is_file()   # --runs governs every run
+    iteration = tomllib.loads((runs / "iteration-0-quick.toml").read_text())["zip"]     # each sample its own seed
+    assert sorted(iteration["seed"]) == [1, 2] and len(set(iteration["name"])) == 2
     # again: the card is this calibration's: read back, nothing rerun, the card unchanged
     before = card.path.read_bytes()
     assert main(["calibrate", str(target), "--quick", "--json"]) == 0
@@ -224,6 +227,20 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     assert " 0 to run" in captured.err                               # the calibration's own element runs
     for a in res["achieved"]:
         assert measured[a["quantity"]] == pytest.approx(a["value"], abs=1e-9)
+
+
+def test_each_calibration_sample_runs_on_its_own_seeds():
+    """No two samples of a calibration share a specimen: every (sample, iteration) has its own packing
+    seeds, the same ones each time the calibration runs (so a resumed one reuses its runs)."""
+    from interphase.campaign.calibrate import sample_rows
+
+    z = {"friction_pp": [0.3, 0.5, 0.7], "name": ["a", "b", "c"]}
+    rows = [sample_rows(z, it, 2) for it in range(2)]
+    for r in rows:
+        assert r["friction_pp"] == [0.3, 0.3, 0.5, 0.5, 0.7, 0.7] and r["name"] == ["a", "a", "b", "b", "c", "c"]
+    seeds = rows[0]["seed"] + rows[1]["seed"]
+    assert len(set(seeds)) == len(seeds) == 12 and min(seeds) == 1 and rows[0]["seed"][:2] == [1, 2]
+    assert sample_rows(z, 1, 2) == rows[1]
 
 
 def test_hexatic_order_tells_a_triangular_lattice_from_a_disordered_packing():

@@ -46,7 +46,7 @@ import tomli_w
 from interphase.analysis.cell_ensemble import at_critical_state
 from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
-from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare
+from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare, sample_rows
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields
@@ -182,7 +182,7 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
         zip_["name"] = [f"{target.name}-i{it}-k{k}" for k in range(len(params))]
         base = {k: v for k, v in probe.cell_case(nominal(rec.confining_stress)).items() if k not in names and k != "seed"}
         path = write_campaign(runs / f"iteration-{it}{tag}.toml", name=f"calibrate-{target.name}-i{it}", case=base,
-                              zip_=zip_, sweep={"seed": list(range(1, int(budget["seeds"]) + 1))},
+                              zip_=sample_rows(zip_, it, int(budget["seeds"])),
                               description=f"calibration of {target.name}, iteration {it}")
         loose = {k: v for k, v in zip_.items() if k != "preparation"}
         tok = {k: v for k, v in probe.cell_case(nominal(rec.confining_stress), axial_strain=TOKEN_STRAIN).items()
