@@ -66,9 +66,8 @@ def table(summ: pd.DataFrame, store) -> tuple[pd.DataFrame, pd.DataFrame]:
         v = seed_values(g, store)
         t = g.set_index("case_id")["elapsed"].astype(float)
         for case, c in v.groupby("case", sort=True):
-            col = "peak"
             rows.append({"depth": key[0], "length": key[1], "case": case, "test": c["test"].iloc[0],
-                         "seeds": int(c[col].notna().sum()), "mean": c[col].mean(), "sd": c[col].std(ddof=1),
+                         "seeds": int(c["peak"].notna().sum()), "mean": c["peak"].mean(), "sd": c["peak"].std(ddof=1),
                          "E": c["E"].mean() if "E" in c else np.nan,
                          "run_s": float(t.reindex(c["case_id"]).mean())})
     per = pd.DataFrame(rows)

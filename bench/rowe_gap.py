@@ -24,7 +24,6 @@ A measurement: exit 0 whatever it finds.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -35,6 +34,7 @@ from scipy import stats
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from state_line import record_rows, state_row  # noqa: E402
 
+from interphase.analysis.ensemble import t_interval  # noqa: E402
 from interphase.analysis.triaxial import friction_angle  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -52,19 +52,20 @@ def phi_f_at_psi_max(phi_peak_deg, psi_max_deg):
 
 def mean_ci(v) -> str:
     v = np.asarray(v, float)
-    h = stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size)
-    return f"{v.mean():.2f} ({v.mean() - h:.2f} to {v.mean() + h:.2f}), sd {v.std(ddof=1):.2f}, n {v.size}"
+    lo, hi = t_interval(v)
+    return f"{v.mean():.2f} ({lo:.2f} to {hi:.2f}), sd {v.std(ddof=1):.2f}, n {v.size}"
 
 
 def grain_sets(folder: Path) -> None:
     summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str})
     curves = pd.read_parquet(folder / "cell_curves.parquet")
     keys = [k for k in ("friction_pp", "rolling_friction", "preparation") if k in summ]
+    grains = summ.set_index("case_id")[keys]
     rows = []
-    for _, r in summ.iterrows():
-        c = curves[curves["case_id"] == r["case_id"]].sort_values("eps1")
-        rows.append({**{k: r[k] for k in keys}, **state_row(c["eps1"].to_numpy(), c["epsv"].to_numpy(),
-                                                             c["ratio"].to_numpy(), c["e"].to_numpy())})
+    for cid, c in curves.groupby("case_id", sort=False):
+        c = c.sort_values("eps1")
+        rows.append({**grains.loc[cid].to_dict(), **state_row(c["eps1"].to_numpy(), c["epsv"].to_numpy(),
+                                                               c["ratio"].to_numpy(), c["e"].to_numpy())})
     runs = pd.DataFrame(rows)
     runs["gap"] = phi_f_at_psi_max(runs["phi_peak_deg"], runs["psi_max_deg"]) - runs["phi_end_deg"]
     runs["lag"] = 100 * (runs["eps1_psi"] - runs["eps1_peak"])

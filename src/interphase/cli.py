@@ -584,14 +584,14 @@ def _by_fields(items: list[str]) -> dict[str, float]:
     """--by FIELD=VALUE arguments as {field: value}."""
     out = {}
     for item in items:
-        field, sep, value = item.partition("=")
+        field, _, value = item.partition("=")
         try:
+            if not field.strip():
+                raise ValueError
             out[field.strip()] = float(value)
         except ValueError:
             raise InputError(f"--by {item}: not FIELD=VALUE with a number", where="campaign compare",
                              fix="e.g. --by box_depth_d50=10") from None
-        if not sep or not field.strip():
-            raise InputError(f"--by {item}: not FIELD=VALUE", where="campaign compare", fix="e.g. --by box_depth_d50=10")
     return out
 
 
