@@ -353,7 +353,8 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     target = tmp_path / "targets" / "tiny.toml"
     target.parent.mkdir()
     target.write_text(text)
-    cmd = [sys.executable, "-m", "interphase.cli", "calibrate", str(target), "--quick", "--json"]
+    cmd = [sys.executable, "-m", "interphase.cli", "calibrate", str(target), "--quick", "--json",
+           "--runs", str(tmp_path / "runs")]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)
     assert res.returncode == 0, res.stderr[-3000:]
     out = json.loads(res.stdout)
@@ -378,6 +379,18 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     before = Path(out["card"]).read_bytes()
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert again.returncode == 2 and Path(out["card"]).read_bytes() == before
+
+    # on a fresh machine: its runs packed as tables, restored, and nothing run again
+    pack = [sys.executable, "-m", "interphase.cli", "pack", str(tmp_path / "runs"), "-o", str(tmp_path / "pack")]
+    assert subprocess.run(pack, capture_output=True, text=True, timeout=300).returncode == 0
+    fresh = cmd[:-2] + ["--runs", str(tmp_path / "fresh"), "-o", str(tmp_path / "again.toml"),
+                        "--restore", str(tmp_path / "pack")]
+    res = subprocess.run(fresh, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    metas = [json.loads(p.read_text()) for p in (tmp_path / "fresh").rglob("case.json")]
+    assert len(metas) == sum(1 for _ in (tmp_path / "runs").rglob("DONE"))
+    assert all(m["provenance"].get("restored_from") for m in metas)
+    assert load_card(tmp_path / "again.toml").soil == card.soil
 
 
 def test_the_model_against_laboratory_figures_draw(tmp_path):

@@ -496,6 +496,13 @@ def _add_report(sub) -> None:
     p.add_argument("--json", action="store_true", help="print JSON (files, warnings)")
     p.set_defaults(func=_cmd_report)
 
+    p = sub.add_parser("pack", help="a runs folder's finished runs as tables (per campaign folder: summaries.csv and "
+                       "curves.parquet), to commit and restore elsewhere (`campaign calibrate --restore`)")
+    p.add_argument("runs", help="runs folder (a campaign's or a calibration's, with every campaign folder under it)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="the folder to write the tables into")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=_cmd_pack)
+
     p = sub.add_parser("predict", help="interface friction from a profile: θa → θr → E → tan δ")
     p.add_argument("profile", help="profile file: Dektak export or two columns x z")
     p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (default with --soil: the card's)")
@@ -600,6 +607,18 @@ def _runs_folder(campaign_path: str, runs: str | None = None):
     from interphase.campaign.schema import campaign_output
 
     return campaign_output(campaign_path, runs)[0]
+
+
+def _cmd_pack(args) -> int:
+    from interphase.campaign.restore import pack_runs
+
+    written = pack_runs(args.runs, args.output)
+    if args.json:
+        _print_json({"tables": [{"path": str(p), "runs": n} for p, n in written]})
+    else:
+        for p, n in written:
+            print(f"{p}: {n} finished run(s)")
+    return 0
 
 
 def _cmd_report(args) -> int:

@@ -49,6 +49,9 @@ def add_soils(sub, print_json) -> None:
     p.add_argument("-o", "--output", default=None, metavar="CARD",
                    help="the soil card to write, never over another card (default: [target] card, else "
                    "soils/<target name>.toml beside the target file)")
+    p.add_argument("--restore", default=None, metavar="PACK",
+                   help="first bring back the finished runs a `campaign pack` of this calibration's runs folder "
+                   "holds (rows taken by case id), so a calibration goes on on a fresh machine")
     _run_options(p, runs="[target] runs, else runs/calibrate/<target name> beside the target file")
     p.set_defaults(func=lambda a: _cmd_calibrate(a, print_json))
 
@@ -282,7 +285,7 @@ def _cmd_calibrate(args, print_json) -> int:
     if is_cell_target(args.target):
         result = calibrate_cell(args.target, quick=args.quick, card_path=args.output, output=args.runs,
                                 executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
-                                rerun_failed=args.rerun_failed)
+                                rerun_failed=args.rerun_failed, restore=args.restore)
         if args.json:
             print_json(result)
         else:
@@ -292,7 +295,7 @@ def _cmd_calibrate(args, print_json) -> int:
     nan = float("nan")
     result = calibrate(args.target, quick=args.quick, card_path=args.output, output=args.runs,
                        executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
-                       rerun_failed=args.rerun_failed)
+                       rerun_failed=args.rerun_failed, restore=args.restore)
     if args.json:
         print_json(result)
         return 0

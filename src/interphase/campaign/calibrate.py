@@ -50,6 +50,7 @@ import numpy as np
 import tomli_w
 
 from interphase.campaign.element import element_of, run_cases, run_element, write_campaign
+from interphase.campaign.restore import restoring
 from interphase.errors import InputError
 from interphase.soil import SOIL_FIELDS, SoilCard, element_fields, load_card, read_toml, soil_fields
 
@@ -319,9 +320,11 @@ def existing_card(plan: Plan) -> dict | None:
 
 
 def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
-              stream=None, rerun_failed: bool = False) -> dict:
+              stream=None, rerun_failed: bool = False, restore=None) -> dict:
     """Calibrate, write the soil card, return what it holds (JSON data). A card already at the
-    card's path is read back when it is this calibration's, else refused (`existing_card`)."""
+    card's path is read back when it is this calibration's, else refused (`existing_card`).
+    `restore`: a pack of this calibration's runs folder (`campaign pack`) whose finished runs are
+    brought back before each generated campaign runs."""
     stream = stream or sys.stdout
     plan = plan_calibration(target_path, quick=quick, card_path=card_path, output=output)
     print(f"calibrate {plan.name}: card {plan.card} ({plan.card_from}); runs folder {plan.runs} ({plan.runs_from})",
@@ -332,11 +335,13 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
               "rerun", file=stream, flush=True)
         return done
     t0 = time.time()
-    calib, history, n_runs = _sample(plan, executor, jobs, stream, rerun_failed)
-    chosen, posterior, ess = _posterior(calib, list(plan.target.free), plan.target)
-    card = SoilCard(name=plan.name, path=plan.card, soil={**plan.target.soil, **chosen}, element=plan.target.element)
-    final, achieved, verification, n_final = _final_checks(card, plan.target, int(plan.budget["final_seeds"]),
-                                                           plan.runs / "element", executor, jobs, stream, rerun_failed)
+    with restoring(plan.runs, restore):
+        calib, history, n_runs = _sample(plan, executor, jobs, stream, rerun_failed)
+        chosen, posterior, ess = _posterior(calib, list(plan.target.free), plan.target)
+        card = SoilCard(name=plan.name, path=plan.card, soil={**plan.target.soil, **chosen}, element=plan.target.element)
+        final, achieved, verification, n_final = _final_checks(card, plan.target, int(plan.budget["final_seeds"]),
+                                                               plan.runs / "element", executor, jobs, stream,
+                                                               rerun_failed)
     result = {
         "card": str(plan.card), "target": plan.target.name, "chosen": chosen, "posterior": posterior,
         "achieved": achieved, "verification": verification,

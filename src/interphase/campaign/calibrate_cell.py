@@ -48,6 +48,7 @@ from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
 from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare, sample_rows
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
+from interphase.campaign.restore import restoring
 from interphase.errors import InputError
 from interphase.soil import CELL_DEFAULTS, SoilCard, load_card, read_toml, soil_fields
 
@@ -278,8 +279,8 @@ def _final(card: SoilCard, target: CellTarget, seeds, runs: Path, executor, jobs
 
 
 def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=None, executor=None, jobs=None,
-                   stream=None, rerun_failed: bool = False) -> dict:
-    from interphase.campaign.density import REFERENCE_STRESS, void_ratio_map
+                   stream=None, rerun_failed: bool = False, restore=None) -> dict:
+    """calibrate.calibrate for a record target: the laboratory's test on the cell; `restore` as there."""
     from interphase.campaign.folders import calibrate_folders, next_free
 
     stream = stream or sys.stdout
@@ -292,6 +293,15 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
     if card_at.exists():
         raise InputError(f"{card_at} exists; a calibration never replaces it", where=f"card {card_at} ({card_from})",
                          fix=f"write the new card elsewhere: -o {next_free(card_at)}")
+    with restoring(runs, restore):
+        result = _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, stream, rerun_failed)
+    _write(card_at, target, result, name)
+    return result
+
+
+def _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, stream, rerun_failed) -> dict:
+    from interphase.campaign.density import REFERENCE_STRESS, void_ratio_map
+
     t0 = time.time()
     tag = "-quick" if quick else ""
     e_min = e_min_once(target, runs, executor, jobs, stream, rerun_failed)
@@ -319,7 +329,6 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
                               "iterations": int(budget["iterations"]), "samples": len(history),
                               "effective_sample_size": ess, "e_min_frictionless": e_min, "budget": budget,
                               "quick": quick, "engine": "liggghts"}}
-    _write(card_at, target, result, name)
     return result
 
 

@@ -47,19 +47,21 @@ CELL_SERIES = ("eps1", "epsv", "e", "ratio")
 
 def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None,
               rerun_failed: bool = False, columns=SHEAR_SERIES):
-    """Run a generated campaign file; returns (planned cases, {case_id: series DataFrame of
+    """Run a generated campaign file (its finished runs first restored from a pack when the command
+    restores from one: restore.restoring); returns (planned cases, {case_id: series DataFrame of
     `columns`}, summaries table of the finished ones). Failed cases are reported by the run and left
     out of the results (`failures` says why); `rerun_failed` runs them again."""
     from interphase.campaign.plan import plan
+    from interphase.campaign.restore import packed_table
     from interphase.campaign.run import run_campaign
     from interphase.campaign.schema import load_campaign
     from interphase.campaign.store import CampaignStore
 
+    campaign = load_campaign(path)
     report = run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False,
-                          rerun_failed=rerun_failed)
+                          rerun_failed=rerun_failed, restore=packed_table(campaign.output))
     if report.interrupted:      # Ctrl-C, SIGTERM, a full disk: the command stops here, not only this campaign
         raise KeyboardInterrupt(report.stopped or "interrupted")
-    campaign = load_campaign(path)
     planned = plan(campaign)
     series = {}
     with CampaignStore(campaign.output) as store:

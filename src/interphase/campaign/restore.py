@@ -12,9 +12,10 @@ never used. A case that already has a folder here (finished, failed or under way
 
 A restored folder holds case.json (the plan's inputs and metadata; provenance from the row: engine
 build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields), DONE, and,
-when the report's `curves.parquet` lies beside the table, series.parquet with the run's stress-ratio
-curve (shear_disp, stress_ratio): the seed ensembles' tan δ, tan φ and E are made from those curves
-(analysis.ensemble_table). With a curves table, a row whose curve it lacks is not restored but run again
+when a `curves.parquet` lies beside the table, series.parquet with the run's curve: the report's
+(shear_disp, stress_ratio), from which the seed ensembles' tan δ, tan φ and E are made
+(analysis.ensemble_table), or a pack's (`pack_runs`: the series columns the element and cell tests
+read). With a curves table, a row whose curve it lacks is not restored but run again
 (it could not join its ensemble); without one, rows are restored without curves. It has no dumps:
 force networks and animations are not available for it.
 """
@@ -24,6 +25,8 @@ from __future__ import annotations
 import math
 import shutil
 import time
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -57,7 +60,7 @@ def read_record(path: str | Path) -> pd.DataFrame:
     """The summaries table, with a clear error when it is not one."""
     path = Path(path)
     try:
-        df = pd.read_csv(path, dtype={"case_id": str, "pair_id": str, "recipe_id": str})
+        df = pd.read_csv(path, dtype={"case_id": str, "pair_id": str, "recipe_id": str}, float_precision="round_trip")
     except FileNotFoundError:
         raise InputError(f"no such file {str(path)!r}", where="--restore",
                          fix="give the summaries table a `campaign report` wrote (report/tables/summaries.csv) "
@@ -82,16 +85,17 @@ CURVES = "curves.parquet"
 
 
 def _curves(path: Path) -> dict[str, pd.DataFrame]:
-    """{case_id: (shear_disp, stress_ratio) frame} of a curves table; {} when there is none."""
+    """{case_id: series frame} of a curves table (every column but case_id; a column a case has no
+    values in is left out of its frame); {} when there is none."""
     if not path.exists():
         return {}
     try:
-        df = pd.read_parquet(path, columns=["case_id", "shear_disp", "stress_ratio"])
+        df = pd.read_parquet(path)
+        df["case_id"] = df["case_id"].astype(str)
     except (OSError, ValueError, KeyError) as exc:
         raise InputError(f"{path}: does not read as the report's curves table ({exc})", where="--restore",
                          fix="copy report/tables/curves.parquet beside the summaries table, or remove it") from None
-    df["case_id"] = df["case_id"].astype(str)
-    return {cid: g[["shear_disp", "stress_ratio"]].astype(float).reset_index(drop=True)
+    return {cid: g.drop(columns="case_id").dropna(axis=1, how="all").astype(float).reset_index(drop=True)
             for cid, g in df.groupby("case_id", sort=False)}
 
 
@@ -177,3 +181,80 @@ def describe(r: Restored) -> str:
                  "not used)")
     return text
 
+
+
+# ---- packs: a whole runs folder as tables (`campaign pack`, `campaign calibrate --restore`) ----------
+
+#: (runs root, pack root) while a command restores the generated campaigns under a runs root from a pack
+_PACK: ContextVar[tuple[Path, Path] | None] = ContextVar("restore_pack", default=None)
+
+
+def pack_runs(runs: str | Path, out: str | Path) -> list[tuple[Path, int]]:
+    """Every campaign store under `runs` as tables under `out`, at the store's own relative path:
+    summaries.csv (`CampaignStore.summaries`, its finished runs) and curves.parquet (case_id and the
+    series columns the element and cell tests read, every recorded row as recorded: a calibration
+    resumed from its pack must read the same numbers, or its next iteration's samples, and with them
+    the case ids, would move). What a calibration or generated campaign needs to go on on another
+    machine without its dumps. Returns [(table, rows)]."""
+    from interphase.campaign.element import CELL_SERIES, SHEAR_SERIES
+
+    runs, out = Path(runs), Path(out)
+    if not runs.is_dir():
+        raise InputError(f"no runs folder {str(runs)!r}", where="campaign pack", fix="give the runs folder a "
+                         "campaign or calibration wrote (its [campaign] output or --runs)")
+    written = []
+    for index in sorted(runs.rglob(st.INDEX)):
+        with st.CampaignStore(index.parent) as store:
+            summ = store.summaries()
+            frames = []
+            for cid in summ["case_id"].astype(str) if len(summ) else []:
+                path = store.case_folder(cid) / "series.parquet"
+                try:
+                    names = [c for c in (*SHEAR_SERIES, *CELL_SERIES) if c in pd.read_parquet(path).columns]
+                    frames.append(pd.read_parquet(path, columns=names).assign(case_id=cid))
+                except (OSError, ValueError):
+                    continue            # a restored run of a report's table has only its curve: kept as it is
+        if not len(summ):
+            continue
+        dest = out / index.parent.relative_to(runs)
+        dest.mkdir(parents=True, exist_ok=True)
+        summ.to_csv(dest / "summaries.csv", index=False)
+        if frames:
+            curves = pd.concat(frames, ignore_index=True)
+            curves["case_id"] = curves["case_id"].astype("category")
+            curves.to_parquet(dest / CURVES, index=False, compression="zstd")
+        written.append((dest / "summaries.csv", len(summ)))
+    if not written:
+        raise InputError(f"{runs}: no finished run in any campaign folder under it", where="campaign pack",
+                         fix="give the runs folder a campaign or calibration wrote")
+    return written
+
+
+@contextmanager
+def restoring(runs: str | Path, pack: str | Path | None):
+    """While inside, a generated campaign whose output lies under `runs` restores its finished runs
+    from the pack's table at the same relative path (`packed_table`), then runs the rest. A pack of
+    another calibration's runs restores nothing: rows are taken by case id only."""
+    if pack is not None and not Path(pack).is_dir():
+        raise InputError(f"no pack folder {str(pack)!r}", where="--restore",
+                         fix="give the folder `campaign pack RUNS -o FOLDER` wrote")
+    token = _PACK.set(None if pack is None else (Path(runs).resolve(), Path(pack)))
+    try:
+        yield
+    finally:
+        _PACK.reset(token)
+
+
+def packed_table(output: str | Path) -> Path | None:
+    """The pack's summaries table for a campaign whose runs folder is `output`, None when no pack is
+    being restored from or it has none for that folder."""
+    got = _PACK.get()
+    if got is None:
+        return None
+    runs, pack = got
+    try:
+        rel = Path(output).resolve().relative_to(runs)
+    except ValueError:
+        return None
+    table = pack / rel / "summaries.csv"
+    return table if table.exists() else None
