@@ -25,7 +25,7 @@ humps do), so its truth is the mean of their bases' maxima. Each candidate is ru
   per-seed SG     each seed's own maximum of its Savitzky–Golay quadratic over 2 % of ε1
 
 Bias, spread (sd) and RMS error are in degrees of φ (R mapped through asin((R − 1)/(R + 1))), for
-n = 2, 3, 5 (groups with fewer runs than n are skipped; draws are with replacement of the residual
+n = 2, 3, 5, 6 (groups with fewer runs than n are skipped; draws are with replacement of the residual
 donor, without replacement of the bases). The truth's dependence on `BASE` is printed beside (the
 decomposition is by scale; a different scale moves the truth, and the table says by how much).
 `--export` writes the curves file from finished triaxial runs (history.parquet) in the run folders.
@@ -92,11 +92,12 @@ def _smooth(R: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
 
 
 def psi_candidates(V: np.ndarray, grid: np.ndarray) -> dict[str, float]:
-    """Each estimator's ψ_max [°] of the seeds' εv `V` (n, m): the rate over the seed-mean curve's
-    window of largest dilation (the tool before this bench), or each seed's own largest."""
+    """Each estimator's ψ_max [°] of the seeds' εv `V` (n, m): the seed-mean curve's window of
+    largest dilation (the tool's before 2026-11-28), or each seed's own largest (the tool's,
+    analysis.cell_ensemble)."""
     tool = cell_result("triaxial", math.nan, [(grid, v, np.ones_like(grid)) for v in V], [math.nan] * len(V))
-    own = np.array([np.nanmax(-window_slopes(grid, v, WINDOW)[1]) for v in V])
-    return {"ψ: mean curve's window": tool.psi_max_deg, "ψ: per-seed max": float(psi_from_rate(own.mean()))}
+    mean_curve = float(psi_from_rate(np.nanmax(-window_slopes(grid, V.mean(axis=0), WINDOW)[1])))
+    return {"ψ: mean curve's window": mean_curve, "ψ: per-seed max": tool.psi_max_deg}
 
 
 def candidates(R: np.ndarray, grid: np.ndarray) -> dict[str, float]:
@@ -125,7 +126,7 @@ def measure(curves: pd.DataFrame, draws: int, seed: int, base: float) -> pd.Data
     ids = curves.drop_duplicates("case_id").set_index("case_id").loc[runs]
     groups = [np.asarray(v) for v in ids.reset_index().groupby(GROUP).indices.values()]
     rows = []
-    for n in (2, 3, 5):
+    for n in (2, 3, 5, 6):
         usable = [g for g in groups if len(g) >= n]
         if not usable:
             continue
