@@ -56,11 +56,12 @@ ROOT = Path(__file__).resolve().parents[1]
 CURVES = ROOT / "docs" / "soils" / "karlsruhe-fine-sand" / "triaxial_curves.parquet"
 END = 0.15            # [-] the curves are compared up to this ε1 (every run reaches it)
 BASE = 0.03           # [-] the Savitzky–Golay window that defines a specimen's fluctuation-free hump
-GROUP = ["shear_modulus", "normal_stress", "friction_pp", "rolling_friction", "preparation", "n_grains"]
+GROUP = ["test", "shear_modulus", "normal_stress", "friction_pp", "rolling_friction", "preparation", "n_grains"]
 
 
 def export(out: Path, folders: list[str]) -> None:
-    """Each finished 3D triaxial run of `folders` reaching END: its inputs and R, εv on the grid."""
+    """Each finished triaxial (3D) or biaxial (quasi-2D) run of `folders` reaching END: its inputs and
+    R, εv on the grid."""
     grid = np.round(np.arange(0.0, END + 1e-12, STEP), 6)
     rows = []
     for f in folders:
@@ -69,7 +70,7 @@ def export(out: Path, folders: list[str]) -> None:
             if not (d / "DONE").exists() or not (d / "history.parquet").exists():
                 continue
             inp = json.loads(case.read_text())["inputs"]
-            if inp.get("test") != "triaxial":
+            if inp.get("test") not in ("triaxial", "biaxial"):
                 continue
             h = pd.read_parquet(d / "history.parquet", columns=["eps1", "epsv", "ratio"]).sort_values("eps1")
             if h["eps1"].max() < END:
@@ -97,7 +98,11 @@ def psi_candidates(V: np.ndarray, grid: np.ndarray) -> dict[str, float]:
     analysis.cell_ensemble)."""
     tool = cell_result("triaxial", math.nan, [(grid, v, np.ones_like(grid)) for v in V], [math.nan] * len(V))
     mean_curve = float(psi_from_rate(np.nanmax(-window_slopes(grid, V.mean(axis=0), WINDOW)[1])))
-    return {"ψ: mean curve's window": mean_curve, "ψ: per-seed max": tool.psi_max_deg}
+    out = {"ψ: mean curve's window": mean_curve, "ψ: per-seed max": tool.psi_max_deg}
+    for w in (0.005, 0.01, 0.02):
+        own = [np.nanmax(-window_slopes(grid, moving_average(grid, v, w), WINDOW)[1]) for v in V]
+        out[f"ψ: per-seed max, εv smoothed {w:.1%}"] = float(psi_from_rate(np.mean(own)))
+    return out
 
 
 def candidates(R: np.ndarray, grid: np.ndarray) -> dict[str, float]:
@@ -124,7 +129,7 @@ def measure(curves: pd.DataFrame, draws: int, seed: int, base: float) -> pd.Data
     residV = V - BV
     psi_truth = np.array([psi_from_rate(np.nanmax(-window_slopes(grid, v, WINDOW)[1])) for v in BV])
     ids = curves.drop_duplicates("case_id").set_index("case_id").loc[runs]
-    groups = [np.asarray(v) for v in ids.reset_index().groupby(GROUP).indices.values()]
+    groups = [np.asarray(v) for v in ids.reset_index().groupby([g for g in GROUP if g in ids.columns]).indices.values()]
     rows = []
     for n in (2, 3, 5, 6):
         usable = [g for g in groups if len(g) >= n]
