@@ -105,8 +105,8 @@ def test_a_soil_cards_fields_count_as_stated():
     # the card's G fills every case: no note may say it takes the 29 GPa default
     import tomllib
 
-    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "stiffness_3d_card.toml")
+    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml")
     assert "shear_modulus" in camp.stated
     assert not [w for w in camp.warnings() if "convergence study" in w]
-    card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand.toml").read_text())["soil"]
+    card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand-2d.toml").read_text())["soil"]
     assert {c.case.shear_modulus for c in camp.cases} == {card["shear_modulus"]} != {29e9}
