@@ -610,7 +610,7 @@ def _runs_folder(campaign_path: str, runs: str | None = None):
 
 
 def _cmd_pack(args) -> int:
-    from interphase.campaign.restore import pack_runs
+    from interphase.campaign.pack import pack_runs
 
     written = pack_runs(args.runs, args.output)
     if args.json:

@@ -14,7 +14,7 @@ A restored folder holds case.json (the plan's inputs and metadata; provenance fr
 build, recipe id, elapsed, `restored_from`), summary.json (the row's summary fields), DONE, and,
 when a `curves.parquet` lies beside the table, series.parquet with the run's curve: the report's
 (shear_disp, stress_ratio), from which the seed ensembles' tan δ, tan φ and E are made
-(analysis.ensemble_table), or a pack's (`pack_runs`: the series columns the element and cell tests
+(analysis.ensemble_table), or a pack's (campaign.pack: the series columns the element and cell tests
 read). With a curves table, a row whose curve it lacks is not restored but run again
 (it could not join its ensemble); without one, rows are restored without curves. It has no dumps:
 force networks and animations are not available for it.
@@ -182,52 +182,10 @@ def describe(r: Restored) -> str:
     return text
 
 
-
-# ---- packs: a whole runs folder as tables (`campaign pack`, `campaign calibrate --restore`) ----------
+# ---- restoring from a pack (campaign/pack.py writes it; `campaign calibrate --restore`) ---------------
 
 #: (runs root, pack root) while a command restores the generated campaigns under a runs root from a pack
 _PACK: ContextVar[tuple[Path, Path] | None] = ContextVar("restore_pack", default=None)
-
-
-def pack_runs(runs: str | Path, out: str | Path) -> list[tuple[Path, int]]:
-    """Every campaign store under `runs` as tables under `out`, at the store's own relative path:
-    summaries.csv (`CampaignStore.summaries`, its finished runs) and curves.parquet (case_id and the
-    series columns the element and cell tests read, every recorded row as recorded: a calibration
-    resumed from its pack must read the same numbers, or its next iteration's samples, and with them
-    the case ids, would move). What a calibration or generated campaign needs to go on on another
-    machine without its dumps. Returns [(table, rows)]."""
-    from interphase.campaign.element import CELL_SERIES, SHEAR_SERIES
-
-    runs, out = Path(runs), Path(out)
-    if not runs.is_dir():
-        raise InputError(f"no runs folder {str(runs)!r}", where="campaign pack", fix="give the runs folder a "
-                         "campaign or calibration wrote (its [campaign] output or --runs)")
-    written = []
-    for index in sorted(runs.rglob(st.INDEX)):
-        with st.CampaignStore(index.parent) as store:
-            summ = store.summaries()
-            frames = []
-            for cid in summ["case_id"].astype(str) if len(summ) else []:
-                path = store.case_folder(cid) / "series.parquet"
-                try:
-                    names = [c for c in (*SHEAR_SERIES, *CELL_SERIES) if c in pd.read_parquet(path).columns]
-                    frames.append(pd.read_parquet(path, columns=names).assign(case_id=cid))
-                except (OSError, ValueError):
-                    continue            # a restored run of a report's table has only its curve: kept as it is
-        if not len(summ):
-            continue
-        dest = out / index.parent.relative_to(runs)
-        dest.mkdir(parents=True, exist_ok=True)
-        summ.to_csv(dest / "summaries.csv", index=False)
-        if frames:
-            curves = pd.concat(frames, ignore_index=True)
-            curves["case_id"] = curves["case_id"].astype("category")
-            curves.to_parquet(dest / CURVES, index=False, compression="zstd")
-        written.append((dest / "summaries.csv", len(summ)))
-    if not written:
-        raise InputError(f"{runs}: no finished run in any campaign folder under it", where="campaign pack",
-                         fix="give the runs folder a campaign or calibration wrote")
-    return written
 
 
 @contextmanager
