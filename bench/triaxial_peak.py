@@ -24,6 +24,9 @@ humps do), so its truth is the mean of their bases' maxima. Each candidate is ru
   per-seed max w  each seed's own maximum of R smoothed over w of ε1 (w = 0.5 %, 1 %, 2 %)
   per-seed SG     each seed's own maximum of its Savitzky–Golay quadratic over 2 % of ε1
 
+and of ψ_max (εv, the truth each base's largest 1 % window rate): the seed-mean curve's window, and
+the mean of each seed's own largest rate, unsmoothed or on εv smoothed over 0.5, 1 or 2 % of ε1.
+
 Bias, spread (sd) and RMS error are in degrees of φ (R mapped through asin((R − 1)/(R + 1))), for
 n = 2, 3, 5, 6 (groups with fewer runs than n are skipped; draws are with replacement of the residual
 donor, without replacement of the bases). The truth's dependence on `BASE` is printed beside (the
@@ -36,7 +39,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import platform
 import sys
 from pathlib import Path
@@ -46,7 +48,6 @@ import pandas as pd
 from scipy.signal import savgol_filter
 
 from interphase.analysis.cell_ensemble import GRID_STEP as STEP
-from interphase.analysis.cell_ensemble import cell_result
 from interphase.analysis.ensemble import peak_values
 from interphase.analysis.strength import moving_average
 from interphase.analysis.triaxial import WINDOW, friction_angle, psi_from_rate, window_slopes
@@ -94,14 +95,12 @@ def _smooth(R: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
 
 def psi_candidates(V: np.ndarray, grid: np.ndarray) -> dict[str, float]:
     """Each estimator's ψ_max [°] of the seeds' εv `V` (n, m): the seed-mean curve's window of
-    largest dilation (the tool's before 2026-11-28), or each seed's own largest (the tool's,
-    analysis.cell_ensemble)."""
-    tool = cell_result("triaxial", math.nan, [(grid, v, np.ones_like(grid)) for v in V], [math.nan] * len(V))
-    mean_curve = float(psi_from_rate(np.nanmax(-window_slopes(grid, V.mean(axis=0), WINDOW)[1])))
-    out = {"ψ: mean curve's window": mean_curve, "ψ: per-seed max": tool.psi_max_deg}
-    for w in (0.005, 0.01, 0.02):
-        own = [np.nanmax(-window_slopes(grid, moving_average(grid, v, w), WINDOW)[1]) for v in V]
-        out[f"ψ: per-seed max, εv smoothed {w:.1%}"] = float(psi_from_rate(np.mean(own)))
+    largest dilation (the tool's reading before), or the mean of each seed's own largest rate on its
+    εv unsmoothed or smoothed over 0.5, 1 or 2 % of ε1 (1 %: the tool's, analysis.cell_ensemble)."""
+    out = {"ψ: mean curve's window": float(psi_from_rate(np.nanmax(-window_slopes(grid, V.mean(axis=0), WINDOW)[1])))}
+    for w in (0.0, 0.005, 0.01, 0.02):
+        own = [np.nanmax(-window_slopes(grid, moving_average(grid, v, w) if w else v, WINDOW)[1]) for v in V]
+        out["ψ: per-seed max" + (f", εv smoothed {w:.1%}" if w else ", unsmoothed")] = float(psi_from_rate(np.mean(own)))
     return out
 
 
