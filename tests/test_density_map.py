@@ -70,3 +70,39 @@ def test_a_picked_preparation_is_kept_for_its_map_and_dropped_with_other_grains_
     again = _Picks(path, case, [1, 2])
     again.put(0.63, 1.0, 0.2269)
     assert sorted(_Picks(path, case, [1, 2]).picks.values()) == [0.1115, 0.2269]
+
+
+def test_a_refit_of_the_same_name_keeps_each_cards_map_and_takes_over_an_unnamed_one(tmp_path):
+    """Two cards of one name in one runs folder (a target refitted: its card is written under the
+    same name into the same folder) each keep their own map file and picks, so a Dr read again on the
+    first card finds the preparation its checks ran at; a map written under the name alone is taken
+    over by the grains and seeds it belongs to, and by no others."""
+    from interphase.campaign.density import _map_file, _Picks
+    from interphase.campaign.element import write_campaign
+    from interphase.soil import load_card
+
+    text = ('[soil]\nname = "sand"\nd50 = 0.00014\ngradation = {{sizes = [0.000112, 0.00014, 0.000168], '
+            'fractions = [0.3, 0.4, 0.3]}}\nshear_modulus = 50e6\nfriction_pp = {mu}\nrolling_friction = 0.1\n'
+            'preparation = 0.2\n\n[cell]\ntest = "triaxial"\nn_grains = 150\n')
+    (tmp_path / "a").mkdir(), (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "sand.toml").write_text(text.format(mu=0.45))
+    (tmp_path / "b" / "sand.toml").write_text(text.format(mu=0.47))
+    first, refit = load_card(tmp_path / "a" / "sand.toml"), load_card(tmp_path / "b" / "sand.toml")
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (pa, ca), (pb, cb) = _map_file(first, 100e3, None, runs, [1, 2]), _map_file(refit, 100e3, None, runs, [1, 2])
+    assert pa != pb and pa.name.startswith("density-sand-100kPa-")
+    assert _map_file(first, 100e3, None, runs, [3, 4])[0] != pa                      # other map seeds
+    _Picks(pa, ca, [1, 2]).put(0.78, 1.0, 0.1115)
+    _Picks(pb, cb, [1, 2]).put(0.78, 1.0, 0.2269)
+    assert _Picks(*_map_file(first, 100e3, None, runs, [1, 2]), [1, 2]).get(0.78, 1.0) == 0.1115
+    # an unnamed map of the first card's grains (as written before the name carried them), in a new folder
+    old = tmp_path / "old"
+    old.mkdir()
+    legacy = old / "density-sand-100kPa.toml"
+    write_campaign(legacy, name=legacy.stem, case=ca, sweep={"preparation": [0.0, 0.3115, 1.0], "seed": [1, 2]})
+    _Picks(legacy, ca, [1, 2]).put(0.78, 1.0, 0.3115)
+    path, case = _map_file(first, 100e3, None, old, [1, 2])
+    assert path != legacy and _Picks(path, case, [1, 2]).get(0.78, 1.0) == 0.3115
+    path, case = _map_file(refit, 100e3, None, old, [1, 2])
+    assert not path.exists() and _Picks(path, case, [1, 2]).get(0.78, 1.0) is None

@@ -94,7 +94,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     limits = lab_limits(float(e[0]), float(e[-1]), card.lab_span)
     if relative_density is None:
         return None, limits
-    picks = _Picks(*_map_file(card, stress, test, output), seeds)
+    picks = _Picks(*_map_file(card, stress, test, output, seeds), seeds)
     if (picked := picks.get(relative_density, card.lab_span)) is not None:
         return picked, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
@@ -156,7 +156,7 @@ def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: P
     a point measured once is never dropped); a preparation's runs have the same id in every map that
     holds it, so a finer map reruns nothing."""
     seeds = [int(s) for s in seeds]
-    path, base = _map_file(card, stress, test, output)
+    path, base = _map_file(card, stress, test, output, seeds)
     name = path.stem
     preparations = sorted({*PREPARATIONS, *(float(p) for p in also), *_mapped(path, base, seeds)})
     path = write_campaign(path, name=name, case=base, sweep={"preparation": preparations, "seed": seeds},
@@ -171,11 +171,34 @@ def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: P
     return preparations, np.asarray(e)
 
 
-def _map_file(card: SoilCard, stress: float, test, output: Path) -> tuple[Path, dict]:
-    """(the map's campaign file in `output`, the [case] its token runs share but for preparation and seed)."""
+def _map_file(card: SoilCard, stress: float, test, output: Path, seeds) -> tuple[Path, dict]:
+    """(the map's campaign file in `output`, the [case] its token runs share but for preparation and seed).
+
+    The file is named by the grains and seeds as well as the card's name: a refit of a target writes a
+    card of the same name into the same runs folder, and on one file per name each card's map (its
+    refined points, its picks) would replace the other's, so a Dr read again on the first card would
+    pick another preparation than its checks were run at. A map written under the name alone (before
+    the grains were in it) is taken over when it is the same grains' and seeds'."""
+    import hashlib
+
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
-    return Path(output) / f"density-{card.name}-{stress / 1e3:g}kPa.toml", base
+    canon = json.dumps({"case": _canonical(base), "seeds": [int(s) for s in seeds]}, sort_keys=True)
+    stem = f"density-{card.name}-{stress / 1e3:g}kPa"
+    path = Path(output) / f"{stem}-{hashlib.sha256(canon.encode()).hexdigest()[:8]}.toml"
+    legacy = Path(output) / f"{stem}.toml"
+    if not path.exists() and _mapped(legacy, base, [int(s) for s in seeds]):
+        path.write_text(legacy.read_text())
+        if (picks := legacy.with_suffix(".picks.json")).exists():
+            path.with_suffix(".picks.json").write_text(picks.read_text())
+    return path, base
+
+
+def _canonical(case: dict) -> dict:
+    """`case` as its TOML file gives it back (what `_mapped` compares)."""
+    import tomllib
+
+    return tomllib.loads(tomli_w.dumps({"case": case}))["case"]
 
 
 class _Picks:
@@ -210,7 +233,7 @@ def _mapped(path: Path, case: dict, seeds: list[int]) -> list[float]:
         return []
     data = tomllib.loads(path.read_text())
     sweep = data.get("sweep", {})
-    if data.get("case") != tomllib.loads(tomli_w.dumps({"case": case}))["case"] or sweep.get("seed") != seeds:
+    if data.get("case") != _canonical(case) or sweep.get("seed") != seeds:
         return []
     return [float(p) for p in sweep.get("preparation", [])]
 
