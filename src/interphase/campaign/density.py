@@ -177,17 +177,18 @@ def _map_file(card: SoilCard, stress: float, test, output: Path, seeds) -> tuple
     The file is named by the grains and seeds as well as the card's name: a refit of a target writes a
     card of the same name into the same runs folder, and on one file per name each card's map (its
     refined points, its picks) would replace the other's, so a Dr read again on the first card would
-    pick another preparation than its checks were run at. A map written under the name alone (before
-    the grains were in it) is taken over when it is the same grains' and seeds'."""
+    pick another preparation than its checks were run at. A map file named by the card alone is taken
+    over when its grains and seeds are these."""
     import hashlib
 
     base = card.cell_case(stress, test=test, axial_strain=TOKEN_STRAIN)
     base.pop("preparation", None), base.pop("seed")
-    canon = json.dumps({"case": _canonical(base), "seeds": [int(s) for s in seeds]}, sort_keys=True)
+    seeds = [int(s) for s in seeds]
+    canon = json.dumps({"case": _canonical(base), "seeds": seeds}, sort_keys=True)
     stem = f"density-{card.name}-{stress / 1e3:g}kPa"
     path = Path(output) / f"{stem}-{hashlib.sha256(canon.encode()).hexdigest()[:8]}.toml"
     legacy = Path(output) / f"{stem}.toml"
-    if not path.exists() and _mapped(legacy, base, [int(s) for s in seeds]):
+    if not path.exists() and _mapped(legacy, base, seeds):
         path.write_text(legacy.read_text())
         if (picks := legacy.with_suffix(".picks.json")).exists():
             path.with_suffix(".picks.json").write_text(picks.read_text())
