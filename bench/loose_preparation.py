@@ -1,0 +1,109 @@
+"""Can the cell's preparation make a looser specimen than its loosest (preparation 1)? A probe for
+the loose-series miss of the sphere cards (docs/soils.md, "From dense to loose: the state line"):
+the loosest packing the protocol makes still dilates ~13° at 200 kPa where the sand at Dr 0.63
+dilates 8.7°.
+
+The preparation scales the grains' sliding and rolling friction during the isotropic consolidation
+(0: frictionless, densest; 1: the grains' own). `Case.preparation` stops at 1; this probe renders
+the state line's case at preparation 1 and raises the consolidation's friction past the grains' own
+by FACTOR in the deck (the first `coefficientFriction`/`coefficientRollingFriction` lines of
+templates/liggghts/cell.in.j2, before the shear restores the grains' own), then reads each run by
+the state line's code (bench/state_line.py `state_row`: φ_peak, ψ_max, e0, Rowe's φ_f, the end).
+
+    PYTHONPATH=src python bench/loose_preparation.py [--factors 1.5 2.5] [--seeds 1 2] \
+        [--runs runs/loose-preparation] [--save docs/soils/loose_preparation]
+
+The state line's grains and protocol (campaigns/soils/state_line.toml): friction 0.5317, rolling
+friction 0.3143, G 50 MPa, 1000 spheres of the Karlsruhe sieve curve, 200 kPa, 10 /s, here to 20 %
+(the peak and ψ_max come before 12 % at preparation 1). Its committed preparation-1 runs
+(docs/soils/state_line/summaries.csv) are the reference row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from state_line import state_row  # noqa: E402
+
+from interphase.case import Case  # noqa: E402
+from interphase.engines.liggghts import Liggghts  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+LINE = ROOT / "campaigns" / "soils" / "state_line.toml"
+
+
+def state_line_case(seed: int) -> Case:
+    import tomllib
+
+    fields = tomllib.loads(LINE.read_text())["case"]
+    g = fields.pop("gradation")
+    from interphase.material import Gradation
+
+    return Case(**(fields | dict(gradation=Gradation(name="user", sizes=tuple(g["sizes"]), fractions=tuple(g["fractions"])),
+                                 preparation=1.0, seed=seed, axial_strain=0.2)))
+
+
+def loosened(deck: str, case: Case, factor: float) -> str:
+    """The deck with the consolidation's friction × factor (the first definition of each; the shear's,
+    later in the deck, keeps the grains' own)."""
+    out = deck
+    for name, value in (("coefficientFriction", case.friction_pp), ("coefficientRollingFriction", case.rolling_friction)):
+        head = f"property/global {name} peratomtypepair 4"
+        start = out.index(head)
+        end = out.index("\n", start)
+        line = out[start:end]
+        parts = line[len(head):].split()
+        assert len(parts) == 16 and all(float(p) == value for p in parts), line
+        out = out[:start] + head + (f" {factor * value!r}" * 16) + out[end:]
+    return out
+
+
+def run(factor: float, seed: int, runs: Path) -> dict:
+    engine, case = Liggghts(), state_line_case(seed)
+    folder = runs / f"f{factor:g}-s{seed}"
+    done = folder / "DONE"
+    if not done.exists():
+        folder.mkdir(parents=True, exist_ok=True)
+        files = engine.render(case)
+        files["in.deck"] = loosened(files["in.deck"], case, factor)
+        for name, body in files.items():
+            (folder / name).write_bytes(body if isinstance(body, bytes) else body.encode())
+        t0 = time.time()
+        engine.execute(folder)
+        done.write_text(f"{time.time() - t0:.1f}\n")
+    h = engine.read_results(folder).history
+    row = state_row(h["eps1"], h["epsv"], h["ratio"], h["e"])
+    return dict(factor=factor, seed=seed, deposition_friction=factor * case.friction_pp,
+                deposition_rolling=factor * case.rolling_friction, elapsed_s=float(done.read_text()), **row)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--factors", type=float, nargs="+", default=[1.5, 2.5])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "loose-preparation")
+    ap.add_argument("--save", type=Path)
+    a = ap.parse_args(argv)
+    rows = pd.DataFrame([run(f, s, a.runs) for f in a.factors for s in a.seeds])
+    ref = pd.read_csv(ROOT / "docs" / "soils" / "state_line" / "summaries.csv")
+    ref = ref.assign(preparation=ref.preparation.fillna(1.0))
+    ref = ref[ref.preparation.isin([0.75, 1.0])]
+    cols = ["factor", "seed", "e0", "phi_peak_deg", "psi_max_deg", "eps1_peak", "phi_f_deg", "phi_end_deg", "e_end",
+            "elapsed_s"]
+    print(rows[cols].round(4).to_string(index=False))
+    print("\nseed means:\n", rows.groupby("factor")[cols[2:]].mean().round(3).to_string())
+    print("\nthe state line (committed, to 40 %):\n", ref[["preparation", "seed", "e0", "phi_peak_deg", "psi_max_deg"]]
+          .round(3).to_string(index=False))
+    if a.save:
+        a.save.mkdir(parents=True, exist_ok=True)
+        rows.to_csv(a.save / "runs.csv", index=False)
+
+
+if __name__ == "__main__":
+    main()
