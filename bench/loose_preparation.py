@@ -4,11 +4,10 @@ the loosest packing the protocol makes still dilates ~13° at 200 kPa where the 
 dilates 8.7°.
 
 The preparation scales the grains' sliding and rolling friction during the isotropic consolidation
-(0: frictionless, densest; 1: the grains' own). `Case.preparation` stops at 1; this probe renders
-the state line's case at preparation 1 and raises the consolidation's friction past the grains' own
-by FACTOR in the deck (the first `coefficientFriction`/`coefficientRollingFriction` lines of
-templates/liggghts/cell.in.j2, before the shear restores the grains' own), then reads each run by
-the state line's code (bench/state_line.py `state_row`: φ_peak, ψ_max, e0, Rowe's φ_f, the end).
+(0: frictionless, densest; 1: the grains' own; above 1 more than their own, up to
+case.PREPARATION_MAX); the compression restores the grains' own. This probe runs the state line's
+case at preparations (FACTORS) 1 and above, and reads each run by the state line's code
+(bench/state_line.py `state_row`: φ_peak, ψ_max, e0, Rowe's φ_f, the end).
 
     PYTHONPATH=src python bench/loose_preparation.py [--factors 1.5 2.5] [--seeds 1 2] \
         [--runs runs/loose-preparation] [--save docs/soils/loose_preparation]
@@ -49,31 +48,12 @@ def state_line_case(seed: int) -> Case:
                                  preparation=1.0, seed=seed, axial_strain=0.2)))
 
 
-def loosened(deck: str, case: Case, factor: float) -> str:
-    """The deck with the consolidation's friction × factor (the first definition of each; the shear's,
-    later in the deck, keeps the grains' own)."""
-    out = deck
-    for name, value in (("coefficientFriction", case.friction_pp), ("coefficientRollingFriction", case.rolling_friction)):
-        head = f"property/global {name} peratomtypepair 4"
-        start = out.index(head)
-        end = out.index("\n", start)
-        line = out[start:end]
-        parts = line[len(head):].split()
-        assert len(parts) == 16 and all(float(p) == value for p in parts), line
-        out = out[:start] + head + (f" {factor * value!r}" * 16) + out[end:]
-    return out
-
-
 def run(factor: float, seed: int, runs: Path) -> dict:
-    engine, case = Liggghts(), state_line_case(seed)
+    engine, case = Liggghts(), state_line_case(seed).replace(preparation=factor)
     folder = runs / f"f{factor:g}-s{seed}"
     done = folder / "DONE"
     if not done.exists():
-        folder.mkdir(parents=True, exist_ok=True)
-        files = engine.render(case)
-        files["in.deck"] = loosened(files["in.deck"], case, factor)
-        for name, body in files.items():
-            (folder / name).write_bytes(body if isinstance(body, bytes) else body.encode())
+        engine.write_input(case, folder)
         t0 = time.time()
         engine.execute(folder)
         done.write_text(f"{time.time() - t0:.1f}\n")

@@ -1,6 +1,7 @@
 """analysis.difference (the agree / differ / undecided decision) and `campaign compare` on real runs."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -10,6 +11,8 @@ from hypothesis import strategies as st
 
 from interphase.analysis.difference import difference, verdict
 from interphase.campaign.compare import compare, seed_values
+
+ROOT = Path(__file__).resolve().parents[1]
 
 samples = st.lists(st.floats(-5, 5, allow_nan=False), min_size=2, max_size=8)
 
@@ -62,6 +65,29 @@ def test_compare_shifted_ensemble_differs_on_its_metric_only():
     t = compare(ref, var).set_index(["case", "metric"])["verdict"]
     assert t["iface-x", "tan_delta"] == "differ"
     assert t["iface-x", "theta_r_deg"] == "agree" and t["box-x", "tan_phi"] == "agree"
+
+
+def test_surface_contacts_are_per_area_in_3d_so_a_deeper_cell_reads_the_same_density():
+    """The committed 3D cell study (docs/reproduction/real_sand/3d/cell/summaries.csv): a surface in a
+    cell 10 D50 deep carries about twice the contacts it carries in one 5 D50 deep; per D50² of
+    surface (length × depth) the two agree within 10 % (the compare's tolerance), per D50 of length
+    alone they would not. A quasi-2D row keeps its length."""
+    from interphase.analysis.ensemble import physical_case
+    from interphase.campaign.compare import surface_extent_d50
+
+    summ = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "cell" / "summaries.csv")
+    iface = summ[summ["test"].eq("interface") & summ["box_length_d50"].eq(20.0)]
+    extent = surface_extent_d50(iface, 0.00014)
+    length = (iface["region_x1"] - iface["region_x0"]) / 0.00014
+    assert np.allclose(extent, length * iface["box_depth_d50"])
+    keys = [iface["label"].map(physical_case), iface["box_depth_d50"]]
+    per_area = (iface["n_contacts_surface"] / extent).groupby(keys).mean().unstack()[[5.0, 10.0]].dropna()
+    per_length = (iface["n_contacts_surface"] / length).groupby(keys).mean().unstack()[[5.0, 10.0]].dropna()
+    assert len(per_area) >= 1
+    assert ((per_area[10.0] / per_area[5.0] - 1).abs() < 0.10).all()
+    assert (per_length[10.0] / per_length[5.0] > 1.7).all()
+    flat = iface.head(1).assign(device="periodic")
+    assert surface_extent_d50(flat, 0.00014).iloc[0] == pytest.approx(length.iloc[0])
 
 
 @pytest.mark.liggghts

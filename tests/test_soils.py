@@ -29,8 +29,28 @@ def test_preparation_default_keeps_every_case_id_and_names_map_to_numbers():
     assert dense.preparation == PREPARATIONS["dense"] == 0.0 and dense.label().endswith("-prep0-s1")
     with pytest.raises(InputError, match="preparation"):
         case_from_dict({"test": "box", "preparation": "very dense"})
-    with pytest.raises(InputError, match=r"\[0, 1\]"):
-        Case(test="box", preparation=1.5)
+    with pytest.raises(InputError, match=r"\[0, 3\]"):
+        Case(test="box", preparation=3.5)
+    assert Case(test="box", preparation=2.5).label().endswith("-prep2.5-s1")
+
+
+def test_a_preparation_above_1_consolidates_more_frictionally_than_the_grains_and_shears_at_their_own():
+    """The cell deck at preparation 2.5 (docs/soils.md, "Looser than the loosest"): the consolidation's
+    sliding and rolling friction are 2.5 times the grains', the compression's the grains' own; and a
+    void-ratio map holding such a point keeps its limits at preparations 0 and 1 (that specimen reads a
+    negative Dr instead of stretching the scale)."""
+    from interphase.campaign.density import limits_of
+    from interphase.engines.liggghts import Liggghts
+    from interphase.material import Gradation
+
+    grains = Gradation(name="user", sizes=(1.26e-4, 1.4e-4, 1.54e-4), fractions=(0.3, 0.4, 0.3))
+    case = Case(test="triaxial", device="periodic3d", d50=1.4e-4, gradation=grains, n_grains=200, friction_pp=0.4,
+                rolling_friction=0.2, preparation=2.5)
+    deck = Liggghts().render(case)["in.deck"]
+    slide = [float(ln.split()[7]) for ln in deck.splitlines() if ln.startswith("fix m4 ")]
+    roll = [float(ln.split()[7]) for ln in deck.splitlines() if ln.startswith("fix m5 ")]
+    assert slide == pytest.approx([1.0, 0.4]) and roll == pytest.approx([0.5, 0.2])
+    assert limits_of([0.0, 0.5, 1.0, 2.5], [0.55, 0.62, 0.66, 0.70]) == (0.55, 0.66)
 
 
 def test_yade_runs_a_prepared_case_with_its_own_driver_and_every_other_as_before():

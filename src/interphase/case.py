@@ -29,6 +29,9 @@ TESTS = ("interface", "box", "triaxial", "biaxial")
 CELL_TESTS = {"triaxial": "periodic3d", "biaxial": "periodic"}
 #: the named preparation states → Case.preparation (docs/soils.md gives the solid fraction each reaches)
 PREPARATIONS = {"dense": 0.0, "medium": 0.3, "loose": 1.0}
+#: the largest Case.preparation: above 1 the consolidation is more frictional than the grains, which
+#: packs looser than the grains' own friction can (docs/soils.md, "Looser than the loosest")
+PREPARATION_MAX = 3.0
 DEVICES = ("walled", "periodic", "periodic3d")
 WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each side wall (Case.window)
 
@@ -79,7 +82,8 @@ class Case:
     preparation: float = 1.0                # the share of the grain–grain sliding and rolling friction
                                             # active while the specimen is deposited and consolidated
                                             # (restored for the shear): 0 the densest, 1 the grains'
-                                            # own (the loosest this protocol makes); names in PREPARATIONS
+                                            # own, above 1 more than their own (looser still, up to
+                                            # PREPARATION_MAX); names in PREPARATIONS
     device: str = "walled"                  # "walled": soil box between side walls (the study's);
                                             # "periodic": x periodic over the box length, no side walls;
                                             # "periodic3d": the same, also periodic in y over
@@ -147,9 +151,10 @@ class Case:
                 bad(f, f"must be ≥ 0, got {getattr(self, f)!r}")
         if not 0 <= self.poisson < 0.5:
             bad("poisson", f"must be in [0, 0.5), got {self.poisson!r}")
-        if not 0 <= self.preparation <= 1:
-            bad("preparation", f"must be in [0, 1] or one of {', '.join(PREPARATIONS)}, got {self.preparation!r}",
-                "0 deposits frictionless grains (densest), 1 at their own friction (loosest)")
+        if not 0 <= self.preparation <= PREPARATION_MAX:
+            bad("preparation", f"must be in [0, {PREPARATION_MAX:g}] or one of {', '.join(PREPARATIONS)}, got "
+                f"{self.preparation!r}", "0 consolidates frictionless grains (densest), 1 at their own friction, "
+                f"{PREPARATION_MAX:g} at {PREPARATION_MAX:g} times it (loosest)")
         if not 0 < self.restitution <= 1:
             bad("restitution", f"must be in (0, 1], got {self.restitution!r}")
         if self.d50 > 0.1:
@@ -420,7 +425,7 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     if isinstance(prep, str):
         if prep not in PREPARATIONS:
             raise InputError(f"unknown preparation {prep!r}", where=f"{where}.preparation",
-                             fix=f"use one of {', '.join(PREPARATIONS)} or a number in [0, 1]")
+                             fix=f"use one of {', '.join(PREPARATIONS)} or a number in [0, {PREPARATION_MAX:g}]")
         kwargs["preparation"] = PREPARATIONS[prep]
     # ints given where floats are expected are fine; floats where ints are expected are not
     for key in ("n_grains", "seed"):

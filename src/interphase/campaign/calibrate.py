@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from interphase.case import PREPARATION_MAX
 from interphase.campaign.element import element_of, run_cases, run_element, write_campaign
 from interphase.campaign.restore import restoring
 from interphase.errors import InputError
@@ -109,9 +110,9 @@ def load_target(path) -> Target:
             raise bad("free", key, f"must be a range [min, max], got {rng!r}", f"e.g. {key} = [0.1, 1.0]")
         if rng[0] >= rng[1]:
             raise bad("free", key, f"the range's min {rng[0]} is not below its max {rng[1]}", "write [min, max]")
-        if rng[0] < 0 or (key == "preparation" and rng[1] > 1):
+        if rng[0] < 0 or (key == "preparation" and rng[1] > PREPARATION_MAX):
             raise bad("free", key, f"the range {rng} leaves the field's domain",
-                      "frictions ≥ 0; preparation within [0, 1]")
+                      f"frictions ≥ 0; preparation within [0, {PREPARATION_MAX:g}]")
         free[key] = (float(rng[0]), float(rng[1]))
     if not free:
         raise InputError("no [free] parameter", where=str(p), fix=f"free some of {', '.join(FREE_FIELDS)} with ranges")

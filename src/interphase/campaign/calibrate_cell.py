@@ -300,7 +300,7 @@ def calibrate_cell(target_path, *, quick: bool = False, card_path=None, output=N
 
 
 def _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, stream, rerun_failed) -> dict:
-    from interphase.campaign.density import REFERENCE_STRESS, void_ratio_map
+    from interphase.campaign.density import REFERENCE_STRESS, limits_of, void_ratio_map
 
     t0 = time.time()
     tag = "-quick" if quick else ""
@@ -311,9 +311,10 @@ def _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, strea
     seeds = list(range(1, min(2, int(budget["final_seeds"])) + 1))      # the density limits: 2 seeds (1 when quick)
     prep, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=runs / f"density{tag}", executor=executor,
                              jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    e_min, e_max = limits_of(prep, e)
     density = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(target.cell["n_grains"]),
                "preparations": list(prep), "void_ratios": [round(float(v), 5) for v in e],
-               "e_min": round(float(e[0]), 5), "e_max": round(float(e[-1]), 5)}
+               "e_min": round(e_min, 5), "e_max": round(e_max, 5)}
     density["lab_span"], density["model_relative_density"] = _lab_span(
         card, target.record, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
     card.extra["density"] = density

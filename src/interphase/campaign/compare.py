@@ -13,8 +13,10 @@ values, each at its own ensemble's reading (analysis.ensemble):
   tan_delta_cs, tan_phi_cs  the seed's mean ratio over the last 40 % of the shear
   E, E_cs                   the seed's interface value over its own box test's (pair_id)
   theta_r_deg               θr at the surface at the run's peak snapshot [deg]
-  surface_contacts_per_d50  contacts on the surface at that snapshot per D50 of surface [1/D50]
-                            (per length: a longer cell has proportionally more)
+  surface_contacts_per_d50  contacts on the surface at that snapshot per D50 of surface length
+                            [1/D50]; in a 3D cell (device periodic3d) per D50² of surface area, the
+                            length times the depth (box_depth_d50): a deeper cell has proportionally
+                            more, so per length alone every depth would read 'differ'
 The two campaigns' specimens are different after consolidation even on the same seed, so the
 comparison is unpaired (Welch).
 """
@@ -39,6 +41,16 @@ COLUMNS = ("case", "metric", "ref", "ref_lo", "ref_hi", "value", "value_lo", "va
            "change_hi", "tol", "verdict", "n_ref", "n_value", "seeds_needed")
 
 
+def surface_extent_d50(rows: pd.DataFrame, d50: float) -> pd.Series:
+    """The surface under the soil of each summary row: its length in D50 (region_x1 − region_x0), and
+    in a 3D cell (device periodic3d) that length times the depth box_depth_d50, in D50²."""
+    num = lambda col: pd.to_numeric(rows[col], errors="coerce") if col in rows else pd.Series(np.nan, index=rows.index)
+    length = (num("region_x1") - num("region_x0")) / d50
+    if "device" not in rows or "box_depth_d50" not in rows:
+        return length
+    return length * num("box_depth_d50").where(rows["device"].eq("periodic3d"), 1.0)
+
+
 def seed_values(summaries: pd.DataFrame, store) -> pd.DataFrame:
     """One row per finished run: physical case, seed, test, pair_id and the per-seed values above
     (E filled in for interface runs whose box test is present)."""
@@ -49,7 +61,7 @@ def seed_values(summaries: pd.DataFrame, store) -> pd.DataFrame:
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median())
         peaks, crits = seed_states([store.curve(cid) for cid in g["case_id"]], PEAK_WINDOW_D50 * d50)
         num = lambda col: pd.to_numeric(g[col], errors="coerce") if col in g else pd.Series(np.nan, index=g.index)
-        cell_d50 = (num("region_x1") - num("region_x0")) / d50          # the surface under the soil [D50]
+        cell_d50 = surface_extent_d50(g, d50)
         frames.append(pd.DataFrame({
             "case": phys, "case_id": g["case_id"].astype(str), "seed": g["seed"].astype(int), "test": g["test"],
             "pair_id": g["pair_id"] if "pair_id" in g else None, "peak": peaks, "critical": crits,

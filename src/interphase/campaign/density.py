@@ -6,7 +6,8 @@ Protocol: the card's cell test (engines/cell.py: isotropic consolidation of a lo
 grain–grain sliding and rolling friction scaled by the preparation), at REFERENCE_STRESS, for each of
 PREPARATIONS, on the seeds given; e is each run's void ratio at the start of its (token) axial
 compression, averaged over the seeds. e_min = e at preparation 0 (frictionless grains: the densest
-packing the protocol makes), e_max = e at preparation 1 (the grains' own friction: the loosest).
+packing the protocol makes), e_max = e at preparation 1 (the grains' own friction; a
+preparation above 1 packs looser still and reads a Dr below 0 on these limits).
 The laboratory's index tests are made at next to no stress; the reference stress is low for the same
 reason (the model's soft grains overlap less there; how much e still moves with stress is measured in
 docs/soils.md). The map e(preparation) between them is what
@@ -49,10 +50,11 @@ def measure_density(card: SoilCard, seeds, *, output: Path | None = None, execut
     output = density_runs(card, output)[0]
     prep, e = void_ratio_map(card, REFERENCE_STRESS, seeds, output=output, executor=executor, jobs=jobs,
                              stream=stream, rerun_failed=rerun_failed)
+    e_min, e_max = limits_of(prep, e)
     e = [float(v) for v in e]
     table = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(card.cell["n_grains"]),
              "preparations": prep, "void_ratios": [round(v, 5) for v in e],
-             "e_min": round(e[0], 5), "e_max": round(e[-1], 5),
+             "e_min": round(e_min, 5), "e_max": round(e_max, 5),
              "method": "campaign density: isotropic consolidation of the card's cell at the reference stress, grain "
                        "friction scaled by the preparation; e at the start of the axial compression, seed mean"}
     written = _append(card, table)
@@ -91,7 +93,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
     prep, e = void_ratio_map(card, stress, seeds, **kw)
-    limits = lab_limits(float(e[0]), float(e[-1]), card.lab_span)
+    limits = lab_limits(*limits_of(prep, e), card.lab_span)
     if relative_density is None:
         return None, limits
     picks = _Picks(*_map_file(card, stress, test, output, seeds), seeds)
@@ -118,7 +120,16 @@ def own_relative_density(card: SoilCard, stress: float, seeds, preparation: floa
     prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], output=output, also=[p], executor=executor,
                              jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     _finished(e, stress, output)
-    return float((e[-1] - e[prep.index(p)]) / (e[-1] - e[0]))
+    e_min, e_max = limits_of(prep, e)
+    return float((e_max - e[prep.index(p)]) / (e_max - e_min))
+
+
+def limits_of(prep, e) -> tuple[float, float]:
+    """(e_min, e_max) of a void-ratio map: e at preparation 0 and at 1, the protocol's densest and its
+    loosest at the grains' own friction, whatever else the map holds (a specimen consolidated more
+    frictionally than the grains, preparation > 1, is looser than e_max: its Dr is negative)."""
+    prep = [float(p) for p in prep]
+    return float(e[prep.index(0.0)]), float(e[prep.index(1.0)])
 
 
 def _finished(e, stress: float, output: Path) -> None:
@@ -151,7 +162,7 @@ def invert_map(prep, e, target: float) -> float:
 def void_ratio_map(card: SoilCard, stress: float, seeds, *, test=None, output: Path, executor=None, jobs=None,
                    stream=None, rerun_failed: bool = False, also=()) -> tuple[list, np.ndarray]:
     """(preparations ascending, seed-mean e at the start of a token compression at `stress` for each):
-    PREPARATIONS (so the first and last points are the limits, 0 and 1), the preparations in `also`,
+    PREPARATIONS (0 and 1 among them: the limits, `limits_of`), the preparations in `also`,
     and every point the map in `output` already holds for the same grains and seeds (a map only grows:
     a point measured once is never dropped); a preparation's runs have the same id in every map that
     holds it, so a finer map reruns nothing."""
