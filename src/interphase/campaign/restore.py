@@ -60,7 +60,8 @@ def read_record(path: str | Path) -> pd.DataFrame:
     """The summaries table, with a clear error when it is not one."""
     path = Path(path)
     try:
-        df = pd.read_csv(path, dtype={"case_id": str, "pair_id": str, "recipe_id": str}, float_precision="round_trip")
+        # pandas 3 reads every float back to the bit (round trip) by default
+        df = pd.read_csv(path, dtype={"case_id": str, "pair_id": str, "recipe_id": str})
     except FileNotFoundError:
         raise InputError(f"no such file {str(path)!r}", where="--restore",
                          fix="give the summaries table a `campaign report` wrote (report/tables/summaries.csv) "
