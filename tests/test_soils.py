@@ -37,8 +37,8 @@ def test_preparation_default_keeps_every_case_id_and_names_map_to_numbers():
 def test_a_preparation_above_1_consolidates_more_frictionally_than_the_grains_and_shears_at_their_own():
     """The cell deck at preparation 2.5 (docs/soils.md, "Looser than the loosest"): the consolidation's
     sliding and rolling friction are 2.5 times the grains', the compression's the grains' own; and a
-    void-ratio map holding such a point keeps its limits at preparations 0 and 1 (that specimen reads a
-    negative Dr instead of stretching the scale)."""
+    void-ratio map holding such a point keeps its limits at preparations 0 and 1 (the point is read on
+    them, never stretches the scale)."""
     from interphase.campaign.density import limits_of
     from interphase.engines.liggghts import Liggghts
     from interphase.material import Gradation

@@ -29,8 +29,8 @@ TESTS = ("interface", "box", "triaxial", "biaxial")
 CELL_TESTS = {"triaxial": "periodic3d", "biaxial": "periodic"}
 #: the named preparation states → Case.preparation (docs/soils.md gives the solid fraction each reaches)
 PREPARATIONS = {"dense": 0.0, "medium": 0.3, "loose": 1.0}
-#: the largest Case.preparation: above 1 the consolidation is more frictional than the grains, which
-#: packs looser than the grains' own friction can (docs/soils.md, "Looser than the loosest")
+#: the largest Case.preparation: above 1 the consolidation is more frictional than the grains (looser
+#: on 50 MPa grains, denser on 500 MPa ones: docs/soils.md, "Looser than the loosest")
 PREPARATION_MAX = 3.0
 DEVICES = ("walled", "periodic", "periodic3d")
 WALL_ZONE_D50 = 3.0      # [D50] left out of the measuring window next to each side wall (Case.window)
@@ -82,7 +82,7 @@ class Case:
     preparation: float = 1.0                # the share of the grain–grain sliding and rolling friction
                                             # active while the specimen is deposited and consolidated
                                             # (restored for the shear): 0 the densest, 1 the grains'
-                                            # own, above 1 more than their own (looser still, up to
+                                            # own, above 1 more than their own (up to
                                             # PREPARATION_MAX); names in PREPARATIONS
     device: str = "walled"                  # "walled": soil box between side walls (the study's);
                                             # "periodic": x periodic over the box length, no side walls;

@@ -6,8 +6,9 @@ Protocol: the card's cell test (engines/cell.py: isotropic consolidation of a lo
 grain–grain sliding and rolling friction scaled by the preparation), at REFERENCE_STRESS, for each of
 PREPARATIONS, on the seeds given; e is each run's void ratio at the start of its (token) axial
 compression, averaged over the seeds. e_min = e at preparation 0 (frictionless grains: the densest
-packing the protocol makes), e_max = e at preparation 1 (the grains' own friction; a
-preparation above 1 packs looser still and reads a Dr below 0 on these limits).
+packing the protocol makes), e_max = e at preparation 1 (the grains' own friction). A
+preparation above 1 is outside these limits: it packed looser on 50 MPa grains and denser on the
+3D Karlsruhe card's 500 MPa ones (docs/soils.md, "Looser than the loosest").
 The laboratory's index tests are made at next to no stress; the reference stress is low for the same
 reason (the model's soft grains overlap less there; how much e still moves with stress is measured in
 docs/soils.md). The map e(preparation) between them is what
@@ -126,8 +127,8 @@ def own_relative_density(card: SoilCard, stress: float, seeds, preparation: floa
 
 def limits_of(prep, e) -> tuple[float, float]:
     """(e_min, e_max) of a void-ratio map: e at preparation 0 and at 1, the protocol's densest and its
-    loosest at the grains' own friction, whatever else the map holds (a specimen consolidated more
-    frictionally than the grains, preparation > 1, is looser than e_max: its Dr is negative)."""
+    loosest at the grains' own friction, whatever else the map holds (a point at a preparation
+    above 1 is read on these limits, never made one)."""
     prep = [float(p) for p in prep]
     return float(e[prep.index(0.0)]), float(e[prep.index(1.0)])
 
