@@ -21,8 +21,8 @@ friction 0.3143, G 50 MPa, 1000 spheres of the Karlsruhe sieve curve, 200 kPa, 1
 from __future__ import annotations
 
 import argparse
+import json
 import sys
-import time
 from pathlib import Path
 
 import pandas as pd
@@ -30,37 +30,32 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from state_line import state_row  # noqa: E402
 
-from interphase.case import Case  # noqa: E402
-from interphase.engines.liggghts import Liggghts  # noqa: E402
+from interphase.campaign.runner import run_single  # noqa: E402
+from interphase.case import Case, case_from_dict  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 LINE = ROOT / "campaigns" / "soils" / "state_line.toml"
 
 
-def state_line_case(seed: int) -> Case:
+def state_line_case(seed: int, preparation: float) -> Case:
+    """The state line's [case] at `preparation` and `seed`, to 20 % of ε1."""
     import tomllib
 
     fields = tomllib.loads(LINE.read_text())["case"]
-    g = fields.pop("gradation")
-    from interphase.material import Gradation
-
-    return Case(**(fields | dict(gradation=Gradation(name="user", sizes=tuple(g["sizes"]), fractions=tuple(g["fractions"])),
-                                 preparation=1.0, seed=seed, axial_strain=0.2)))
+    return case_from_dict(fields | dict(preparation=preparation, seed=seed, axial_strain=0.2), where=str(LINE))
 
 
 def run(factor: float, seed: int, runs: Path) -> dict:
-    engine, case = Liggghts(), state_line_case(seed).replace(preparation=factor)
+    """One run at preparation `factor` (run_single: a finished folder is read back, not rerun)."""
     folder = runs / f"f{factor:g}-s{seed}"
-    done = folder / "DONE"
-    if not done.exists():
-        engine.write_input(case, folder)
-        t0 = time.time()
-        engine.execute(folder)
-        done.write_text(f"{time.time() - t0:.1f}\n")
-    h = engine.read_results(folder).history
-    row = state_row(h["eps1"], h["epsv"], h["ratio"], h["e"])
+    out = run_single(state_line_case(seed, factor), "liggghts", folder)
+    if out["status"] != "done":
+        raise SystemExit(f"{folder}: {out.get('cause')}: {out.get('message')}")
+    h = pd.read_parquet(folder / "series.parquet", columns=["eps1", "epsv", "ratio", "e"])
+    case = state_line_case(seed, factor)
     return dict(factor=factor, seed=seed, deposition_friction=factor * case.friction_pp,
-                deposition_rolling=factor * case.rolling_friction, elapsed_s=float(done.read_text()), **row)
+                deposition_rolling=factor * case.rolling_friction, elapsed_s=float(json.loads((folder / "case.json").read_text())["elapsed"]),
+                **state_row(h["eps1"], h["epsv"], h["ratio"], h["e"]))
 
 
 def main(argv=None) -> None:

@@ -41,10 +41,15 @@ COLUMNS = ("case", "metric", "ref", "ref_lo", "ref_hi", "value", "value_lo", "va
            "change_hi", "tol", "verdict", "n_ref", "n_value", "seeds_needed")
 
 
+def _numeric(rows: pd.DataFrame, col: str) -> pd.Series:
+    """Column `col` of `rows` as numbers (NaN where it is not one, or where the table lacks it)."""
+    return pd.to_numeric(rows[col], errors="coerce") if col in rows else pd.Series(np.nan, index=rows.index)
+
+
 def surface_extent_d50(rows: pd.DataFrame, d50: float) -> pd.Series:
     """The surface under the soil of each summary row: its length in D50 (region_x1 − region_x0), and
     in a 3D cell (device periodic3d) that length times the depth box_depth_d50, in D50²."""
-    num = lambda col: pd.to_numeric(rows[col], errors="coerce") if col in rows else pd.Series(np.nan, index=rows.index)
+    num = lambda col: _numeric(rows, col)
     length = (num("region_x1") - num("region_x0")) / d50
     if "device" not in rows or "box_depth_d50" not in rows:
         return length
@@ -60,7 +65,7 @@ def seed_values(summaries: pd.DataFrame, store) -> pd.DataFrame:
     for phys, g in done.groupby("_phys", sort=True):
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median())
         peaks, crits = seed_states([store.curve(cid) for cid in g["case_id"]], PEAK_WINDOW_D50 * d50)
-        num = lambda col: pd.to_numeric(g[col], errors="coerce") if col in g else pd.Series(np.nan, index=g.index)
+        num = lambda col: _numeric(g, col)
         cell_d50 = surface_extent_d50(g, d50)
         frames.append(pd.DataFrame({
             "case": phys, "case_id": g["case_id"].astype(str), "seed": g["seed"].astype(int), "test": g["test"],
