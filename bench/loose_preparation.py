@@ -14,7 +14,7 @@ case at preparations (FACTORS) 1 and above, and reads each run by the state line
 
 The state line's grains and protocol (campaigns/soils/state_line.toml): friction 0.5317, rolling
 friction 0.3143, G 50 MPa, 1000 spheres of the Karlsruhe sieve curve, 200 kPa, 10 /s, here to 20 %
-(the peak and ψ_max come before 12 % at preparation 1). Its committed preparation-1 runs
+(peaks at 10.7–14.5 % of ε1 over the probe's runs). Its committed preparation-1 runs
 (docs/soils/state_line/summaries.csv) are the reference row.
 """
 
