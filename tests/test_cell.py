@@ -109,6 +109,29 @@ def test_a_laboratory_dr_is_read_on_the_cards_lab_span_and_a_bad_span_is_refused
         load_card(path)
 
 
+def test_a_density_scale_with_an_offset_moves_both_ends_and_a_bad_offset_is_refused(tmp_path):
+    """model Dr = lab_offset + lab_span · Dr (SoilCard.lab_offset): with a negative offset the
+    laboratory's loose end lies beyond the model's loosest packing; a card without one is unchanged."""
+    from interphase.campaign.density import lab_limits
+    from interphase.soil import load_card
+
+    assert lab_limits(0.5, 0.8, 0.6, 0.0) == lab_limits(0.5, 0.8, 0.6)
+    lo, hi = lab_limits(0.5, 0.8, 2.0, -1.2)
+    assert hi == pytest.approx(0.8 + 1.2 * 0.3) and lo == pytest.approx(0.8 - 0.8 * 0.3)
+    for dr in (0.6, 0.81, 0.92):    # the laboratory's Dr read on these limits is the model's Dr of the line
+        target = hi - dr * (hi - lo)
+        assert (0.8 - target) / 0.3 == pytest.approx(-1.2 + 2.0 * dr)
+    path = tmp_path / "s.toml"
+    base = CARD.format(name="s", test="triaxial", n=200, strain=0.03)
+    path.write_text(base)
+    assert load_card(path).lab_offset == 0.0
+    path.write_text(base + "\n[density]\nlab_span = 2.0\nlab_offset = -1.2\n")
+    assert (load_card(path).lab_span, load_card(path).lab_offset) == (2.0, -1.2)
+    path.write_text(base + "\n[density]\nlab_offset = \"-1.2\"\n")
+    with pytest.raises(InputError, match=r"lab_offset.*number"):
+        load_card(path)
+
+
 def test_yade_refuses_the_cell_with_the_engine_that_runs_it():
     from interphase.engines.yade import Yade
 

@@ -24,6 +24,9 @@ def test_a_target_between_two_points_is_bracketed_by_neighbours_in_preparation()
 def test_the_limits_map_to_the_ends():
     assert invert_map(PREP, E, 0.4167) == 0.0 and invert_map(PREP, E, 0.672) == 1.0
     assert invert_map(PREP, E, 0.30) == 0.0 and invert_map(PREP, E, 0.9) == 1.0      # clipped, never outside
+    # a point above 1 (packed denser than 1 on stiff grains) is outside the limits and never read
+    assert invert_map([*PREP, 2.5], [*E, 0.60], 0.9) == 1.0
+    assert invert_map([*PREP, 2.5], [*E, 0.60], 0.5) == invert_map(PREP, E, 0.5)
 
 
 @given(st.lists(st.floats(0.3, 0.9), min_size=2, max_size=9), st.floats(0.25, 0.95), st.floats(0.25, 0.95))
@@ -63,6 +66,7 @@ def test_a_picked_preparation_is_kept_for_its_map_and_dropped_with_other_grains_
     assert first.get(0.7847, 1.0) is None
     first.put(0.7847, 1.0, 0.1115)
     assert _Picks(path, case, [1, 2]).get(0.7847, 1.0) == 0.1115
+    assert _Picks(path, case, [1, 2]).get(0.7847, 1.0, -0.5) is None              # a scale with an offset
     assert _Picks(path, case, [1, 2]).get(0.63, 1.0) is None                      # another Dr: not picked yet
     assert _Picks(path, case, [1, 2]).get(0.7847, 0.64) is None                   # another density scale
     assert _Picks(path, case, [3, 4]).get(0.7847, 1.0) is None                    # other map seeds

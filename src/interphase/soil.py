@@ -14,6 +14,7 @@ Units: SI (m, Pa, m/s, kg/m³).
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,6 +83,16 @@ class SoilCard:
         record's); a laboratory Dr maps onto e = e_max − Dr · lab_span · (e_max − e_min). 1 when the
         card has none: the model's own limits are the laboratory's."""
         return float(self.extra.get("density", {}).get("lab_span", 1.0))
+
+    @property
+    def lab_offset(self) -> float:
+        """The model's Dr [-] that a laboratory Dr of 0 maps onto ([density] lab_offset, fitted beside
+        lab_span on several records of one stress, `campaign.density_scale`): the model's Dr =
+        lab_offset + lab_span · Dr. 0 when the card has none (the one-parameter scale: the model's
+        loosest packing is the laboratory's e_max). Negative when the laboratory's loose end lies
+        beyond what the protocol packs; a Dr mapped there is made at the loosest packing (preparation 1)
+        and reported at the Dr it reached."""
+        return float(self.extra.get("density", {}).get("lab_offset", 0.0))
 
     @property
     def quick(self) -> bool:
@@ -199,6 +210,11 @@ def _check_cell(card: SoilCard, bad) -> None:
     if span is not None and not (isinstance(span, (int, float)) and span > 0):
         raise bad("density", "lab_span", f"must be a positive share, got {span!r}",
                   "the model's Dr at the fitted state over the record's (campaign calibrate writes it)")
+    offset = card.extra.get("density", {}).get("lab_offset")
+    if offset is not None and not (isinstance(offset, (int, float)) and not isinstance(offset, bool)
+                                   and math.isfinite(offset)):
+        raise bad("density", "lab_offset", f"must be a number, got {offset!r}",
+                  "the model's Dr a laboratory Dr of 0 maps onto (bench/density_scale.py fits it), e.g. -1.2")
     if card.cell["test"] not in ("triaxial", "biaxial"):
         raise bad("cell", "test", f"unknown cell test {card.cell['test']!r}", 'use "triaxial" (3D) or "biaxial" (2D)')
     try:

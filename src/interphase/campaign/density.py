@@ -68,7 +68,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     """(preparation, (e_min, e_max)) at `stress` [Pa]: the limits are the void ratios the preparation
     makes at that stress, frictionless (0) and at the grains' own friction (1), from the map
     e(preparation) measured there (token compressions at PREPARATIONS on the first MAP_SEEDS of
-    `seeds`; resumable), e_min moved by the card's lab_span (`lab_limits`); the preparation is that
+    `seeds`; resumable), read on the card's density scale (`lab_limits`); the preparation is that
     map inverted at e = e_max − Dr (e_max − e_min), None without a relative density. Why the test's
     stress and not the index tests' near-zero one: the soft grains squeeze (at G = 50 MPa a packing's
     e falls ~0.07 from 10 to 100 kPa, docs/soils.md), a sand's barely; on limits at 10 kPa a dense
@@ -81,7 +81,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     than asked (Dr 0.03-0.05 less, measured). Up to REFINE times, the preparation read off the map is
     measured itself (the same token runs) and the map read again, until that point's e is within
     E_TOL of the target. Points an earlier call measured in `output` stay on the map
-    (`void_ratio_map`), and the preparation picked for a Dr (on the card's lab_span) is recorded
+    (`void_ratio_map`), and the preparation picked for a Dr (on the card's scale) is recorded
     beside the map (`_Picks`) and returned as it is by every later call on that map: on a noisy map
     each refinement moves the inverse a little (150 grains at 100 kPa: 0.1102, 0.1163, 0.1115, 0.1105,
     0.1104 in turn), and a Dr read again must not make new specimens and rerun the seeds already
@@ -94,11 +94,12 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
     prep, e = void_ratio_map(card, stress, seeds, **kw)
-    limits = lab_limits(*limits_of(prep, e), card.lab_span)
+    span, offset = card.lab_span, card.lab_offset
+    limits = lab_limits(*limits_of(prep, e), span, offset)
     if relative_density is None:
         return None, limits
     picks = _Picks(*_map_file(card, stress, test, output, seeds), seeds)
-    if (picked := picks.get(relative_density, card.lab_span)) is not None:
+    if (picked := picks.get(relative_density, span, offset)) is not None:
         return picked, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
     known = len(prep)
@@ -108,7 +109,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
         if guess in prep or len(prep) >= known + REFINE or np.min(np.abs(e - target)) <= E_TOL:
             break
         prep, e = void_ratio_map(card, stress, seeds, also=[guess], **kw)
-    picks.put(relative_density, card.lab_span, guess)
+    picks.put(relative_density, span, guess, offset)
     return guess, limits
 
 
@@ -143,19 +144,27 @@ def _finished(e, stress: float, output: Path) -> None:
                          fix="see `campaign status` of the density campaign there; --rerun-failed runs them again")
 
 
-def lab_limits(e_min: float, e_max: float, span: float) -> tuple[float, float]:
-    """(e_min, e_max) that a laboratory Dr is read on: the model's loosest packing shared, its densest
-    moved to e_max − span (e_max − e_min) (SoilCard.lab_span: the spheres dilate more than the sand
-    at the same Dr on their own limits, docs/soils.md "Density follows dilatancy")."""
-    return e_max - span * (e_max - e_min), e_max
+def lab_limits(e_min: float, e_max: float, span: float, offset: float = 0.0) -> tuple[float, float]:
+    """(e_min, e_max) that a laboratory Dr is read on, from the model's own (its densest and loosest
+    packings): a laboratory Dr stands for the model's Dr = offset + span · Dr (SoilCard.lab_span and
+    lab_offset: the spheres dilate more than the sand at the same Dr on their own limits, docs/soils.md
+    "Density follows dilatancy"), so Dr 1 is e_max − (offset + span)(e_max − e_min) and Dr 0 is
+    e_max − offset (e_max − e_min). With offset 0 the model's loosest packing is the laboratory's."""
+    d = e_max - e_min
+    return e_max - (offset + span) * d, e_max - offset * d
 
 
 def invert_map(prep, e, target: float) -> float:
-    """The preparation whose e is `target` on the map (prep ascending, e its seed means), rounded to
-    4 decimals (so that a case id is stable). Seed noise can put two close points out of order (at
+    """The preparation in [0, 1] whose e is `target` on the map (prep ascending, e its seed means),
+    rounded to 4 decimals (so that a case id is stable); a target outside the map's e gives its end
+    (0, or 1: looser than the protocol packs). Seed noise can put two close points out of order (at
     200 kPa, e 0.5215 at preparation 0.2269 and 0.5209 at 0.25); a straight line is drawn through the
-    running maximum of e instead, so that the target is always bracketed by neighbours in preparation."""
+    running maximum of e instead, so that the target is always bracketed by neighbours in preparation.
+    Points above 1 are not read: they lie outside the limits and do not continue the map (denser than
+    1 on the 3D Karlsruhe card's grains)."""
     prep, e = np.asarray(prep, float), np.asarray(e, float)
+    keep = prep <= 1.0
+    prep, e = prep[keep], e[keep]
     o = np.argsort(prep, kind="stable")
     return round(float(np.interp(target, np.maximum.accumulate(e[o]), prep[o])), 4)
 
@@ -216,7 +225,7 @@ def _canonical(case: dict) -> dict:
 
 class _Picks:
     """The preparation picked for each relative density on one map, in a JSON file beside the map's
-    campaign file, keyed by the Dr and the lab_span it was read on (together they fix the target e on
+    campaign file, keyed by the Dr and the scale it was read on (lab_span, and lab_offset when not 0) (together they fix the target e on
     the map); kept only while it belongs to the same grains and seeds (as `_mapped` keeps points)."""
 
     def __init__(self, map_path: Path, case: dict, seeds):
@@ -226,14 +235,15 @@ class _Picks:
         self.picks = data.get("picks", {}) if {k: data.get(k) for k in self.key} == self.key else {}
 
     @staticmethod
-    def _key(relative_density: float, lab_span: float) -> str:
-        return f"Dr {relative_density:.6f} on lab_span {lab_span:.6f}"
+    def _key(relative_density: float, lab_span: float, lab_offset: float = 0.0) -> str:
+        key = f"Dr {relative_density:.6f} on lab_span {lab_span:.6f}"
+        return key + (f" lab_offset {lab_offset:.6f}" if lab_offset else "")
 
-    def get(self, relative_density: float, lab_span: float) -> float | None:
-        return self.picks.get(self._key(relative_density, lab_span))
+    def get(self, relative_density: float, lab_span: float, lab_offset: float = 0.0) -> float | None:
+        return self.picks.get(self._key(relative_density, lab_span, lab_offset))
 
-    def put(self, relative_density: float, lab_span: float, preparation: float) -> None:
-        self.picks[self._key(relative_density, lab_span)] = preparation
+    def put(self, relative_density: float, lab_span: float, preparation: float, lab_offset: float = 0.0) -> None:
+        self.picks[self._key(relative_density, lab_span, lab_offset)] = preparation
         self.path.write_text(json.dumps({**self.key, "picks": self.picks}, indent=1) + "\n")
 
 
