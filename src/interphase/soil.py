@@ -87,7 +87,7 @@ class SoilCard:
     @property
     def lab_offset(self) -> float:
         """The model's Dr [-] that a laboratory Dr of 0 maps onto ([density] lab_offset, fitted beside
-        lab_span on several records of one stress, `campaign.density_scale`): the model's Dr =
+        lab_span on several records of one stress: bench/density_scale.py): the model's Dr =
         lab_offset + lab_span · Dr. 0 when the card has none (the one-parameter scale: the model's
         loosest packing is the laboratory's e_max). Negative when the laboratory's loose end lies
         beyond what the protocol packs; a Dr mapped there is made at the loosest packing (preparation 1)
