@@ -225,8 +225,9 @@ def _canonical(case: dict) -> dict:
 
 class _Picks:
     """The preparation picked for each relative density on one map, in a JSON file beside the map's
-    campaign file, keyed by the Dr and the scale it was read on (lab_span, and lab_offset when not 0) (together they fix the target e on
-    the map); kept only while it belongs to the same grains and seeds (as `_mapped` keeps points)."""
+    campaign file, keyed by the Dr and the scale it was read on (lab_span, and lab_offset when not
+    0: together they fix the target e on the map); kept only while it belongs to the same grains and
+    seeds (as `_mapped` keeps points)."""
 
     def __init__(self, map_path: Path, case: dict, seeds):
         self.path = map_path.with_suffix(".picks.json")

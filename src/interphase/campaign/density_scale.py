@@ -1,21 +1,23 @@
 """A card's density scale fitted on several records of one stress: where each record sits on the
 card's preparations, and the straight line from the laboratory's Dr to the model's
-(docs/soils.md, "A density scale fitted on the calibration stress").
+(docs/soils.md, "A scale with an offset").
 
 The one-parameter scale (SoilCard.lab_span, set by a calibration on one record) ties a laboratory
-Dr of 0 to the model's loosest packing. Measured on the 3D Karlsruhe card, that tie is what missed
-the loose series: the card's grains at their loosest read Dr 0.63's strength and dilatancy. With
-records at several densities of one stress, each record's preparation is found on a sweep of the
-card's preparations at that stress (`anchor_preparation`), read as the model's Dr on the card's
-void-ratio map there, and the line `model Dr = lab_offset + lab_span · Dr` fitted through them
-(`fit_scale`). The records of the other stresses stay held out.
+Dr of 0 to the model's loosest packing. With records at several densities of one stress, each
+record's preparation is found on a sweep of the card's preparations at that stress
+(`anchor_preparation`), read as the model's Dr on the card's void-ratio map there (`model_dr`), and
+the line `model Dr = lab_offset + lab_span · Dr` fitted through them (`fit_scale`); whether the
+offset is needed is read from its interval (bench/density_scale.py bootstraps the seeds). The
+records of the other stresses stay held out.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-TOLERANCES = (1.5, 2.0)     # [°] φ_peak and ψ_max: a miss is weighed over these (as a calibration does)
+from interphase.campaign.calibrate import TOLERANCES as _TOL
+
+TOLERANCES = (_TOL["phi_peak_deg"], _TOL["psi_max_deg"])     # [°] a miss is weighed over these, as a calibration does
 GRID = 2001                 # points of the preparation grid the misfit is read on
 
 
