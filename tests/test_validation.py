@@ -104,27 +104,42 @@ def test_validate_prints_criterion_and_baselines(tmp_path):
     assert (tmp_path / "v" / "validation.png").stat().st_size > 10_000
 
 
-@pytest.mark.liggghts
-def test_simulate_runs_each_row_on_the_card_and_resumes(tmp_path):
-    """--simulate's machinery with real LIGGGHTS on the suite's tiny card and a tiny cell: one
-    synthetic saw-tooth row and one flat row, one seed each; a second call reruns nothing."""
-    from interphase.analysis.validation import predict_rows
-    from interphase.campaign.validate import PROTOCOL, simulate, with_dem
-    from interphase.report.build import criterion_model
+#: the tiny cell both --simulate tests run the suite's tiny card in
+TINY_PROTOCOL = {"box_length_d50": 12.0, "box_height_d50": 8.0, "shear_velocity": 0.05, "shear_distance": 0.002}
+
+
+@pytest.fixture(scope="module")
+def simulated_rows(tmp_path_factory):
+    """`simulate` of one synthetic saw-tooth row and one flat row (GOOD[:2]) on the suite's tiny card,
+    seed 1, run once for this module: (table, card, output, protocol, result). Its paired soil test
+    (the card's box at 100 kPa, seed 1) is also the profile test's seed 1: that test reuses it."""
+    from interphase.campaign.validate import PROTOCOL, simulate
     from interphase.soil import load_card
 
     need_binary("liggghts")
-    table = read_lab(_write(tmp_path, GOOD[:2]))
+    tmp = tmp_path_factory.mktemp("simulate")
+    table = read_lab(_write(tmp, GOOD[:2]))
     card = load_card(ROOT / "tests" / "data" / "soils" / "tiny_card.toml")
-    tiny = PROTOCOL | {"box_length_d50": 12.0, "box_height_d50": 8.0, "shear_velocity": 0.05, "shear_distance": 0.002}
-    dem = simulate(table, card, [1], output=tmp_path / "sim", protocol=tiny)
+    tiny = PROTOCOL | TINY_PROTOCOL
+    return table, card, tmp / "sim", tiny, simulate(table, card, [1], output=tmp / "sim", protocol=tiny)
+
+
+@pytest.mark.liggghts
+def test_simulate_runs_each_row_on_the_card_and_resumes(simulated_rows):
+    """--simulate's machinery with real LIGGGHTS on the suite's tiny card and a tiny cell: one
+    synthetic saw-tooth row and one flat row, one seed each; a second call reruns nothing."""
+    from interphase.analysis.validation import predict_rows
+    from interphase.campaign.validate import simulate, with_dem
+    from interphase.report.build import criterion_model
+
+    table, card, out, tiny, dem = simulated_rows
     assert sorted(dem["row"]) == [2, 3]
     d = dem.set_index("row")
     assert (d["dem_seeds"] == 1).all() and d["delta_dem_deg"].between(1, 60).all()
     assert d.loc[2, "delta_dem_deg"] > d.loc[3, "delta_dem_deg"]       # teeth grip more than a flat plate
-    done = sorted((tmp_path / "sim").rglob("DONE"))
-    again = simulate(table, card, [1], output=tmp_path / "sim", protocol=tiny)
-    assert sorted((tmp_path / "sim").rglob("DONE")) == done
+    done = sorted(out.rglob("DONE"))
+    again = simulate(table, card, [1], output=out, protocol=tiny)
+    assert sorted(out.rglob("DONE")) == done
     pd.testing.assert_frame_equal(again, dem)
     df = with_dem(predict_rows(table, lambda mu: criterion_model(mu, None), card), dem)
     assert df["error_dem_deg"].to_numpy() == pytest.approx((df["delta_dem_deg"] - df["delta_measured_deg"]).to_numpy())
@@ -140,23 +155,29 @@ def test_the_simulated_protocol_is_the_studys_in_d50_units():
 
 
 @pytest.mark.liggghts
-def test_predict_simulate_runs_a_profile_on_the_card(tmp_path):
+def test_predict_simulate_runs_a_profile_on_the_card(simulated_rows, tmp_path):
     """`predict --simulate`'s machinery (campaign.validate.simulate_profile) with real LIGGGHTS: a
     measured-style profile (x, z in m: saw-teeth one D50 high, two D50 apart) on the suite's tiny card
-    in a tiny cell, 3 seeds (the fewest with an interval): δ with its interval, and a second call reruns nothing."""
-    from interphase.campaign.validate import PROTOCOL, simulate_profile
-    from interphase.soil import load_card
+    in a tiny cell, 3 seeds (the fewest with an interval): δ with its interval, and a second call reruns
+    nothing. The card's soil test of seed 1 is the same case (the same case id) as the rows'
+    simulation's (simulated_rows): its finished folder is copied in, as a campaign reuses any finished
+    case in its output, and the soil tests of seeds 2 and 3 and the three interface cases run here."""
+    import shutil
 
-    need_binary("liggghts")
-    card = load_card(ROOT / "tests" / "data" / "soils" / "tiny_card.toml")
+    from interphase.campaign.validate import simulate_profile
+
+    _, card, rows_out, tiny, _ = simulated_rows
     d = float(card.soil["d50"])
     x = np.linspace(0, 24 * d, 481)
     z = d * np.abs(((x / (2 * d)) % 1) - 0.5) * 2            # triangle wave: height d, period 2 d
-    tiny = PROTOCOL | {"box_length_d50": 12.0, "box_height_d50": 8.0, "shear_velocity": 0.05, "shear_distance": 0.002}
+    (box,) = [f for f in rows_out.iterdir() if (f / "DONE").exists()
+              and json.loads((f / "case.json").read_text())["inputs"]["test"] == "box"]
+    shutil.copytree(box, tmp_path / "p" / box.name)
     out = simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny)
     assert out["seeds"] == 3 and out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]
     assert 5 < out["delta_deg"] < 60 and out["tan_phi"] > 0
     assert out["E"] == pytest.approx(out["tan_delta"] / out["tan_phi"], rel=0.05)
     done = sorted((tmp_path / "p").rglob("DONE"))
+    assert len(done) == 6                                     # 3 interface cases, 3 soil tests (one copied)
     assert simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny) == out
     assert sorted((tmp_path / "p").rglob("DONE")) == done
