@@ -98,11 +98,8 @@ def test_mismapping_alters_only_the_named_parameters():
 # (residual_stress_ratio), θr over the loaded snapshots and the mean contact overlap. Each deliberate
 # mis-mapping must come out DIFFER on the metric it moves while the true mapping AGREES, on the same
 # LIGGGHTS runs. Tiny periodic cells (12 × 8 D50, uniform grains, 0.5 mm at 0.05 m/s, a snapshot every
-# 0.125 mm: five, as over the former 1 mm; the flat slides at μs from ~0.1 mm, so the residual window,
-# the last 20 % = 0.4–0.5 mm, is already the sliding state; measured 2026-11-28, 1 mm → 0.5 mm: true
-# mapping ratio diff −0.0002 [−0.0010, +0.0006] → −0.0008 [−0.0044, +0.0027] against ±0.03, overlap
-# +0.00022 → +0.00018 against ±0.0013, peak 0.2009 → 0.2004; altered YADE ratio 0.2600 → 0.2584,
-# overlap × 0.70 → × 0.71; the module's CPU 77 → 67 s):
+# 0.125 mm; the flat slides at μs from ~0.1 mm, so the residual window, the last 20 % = 0.4–0.5 mm,
+# is the sliding state):
 # - flat μs = 0.2 (every bottom grain slides: the ratio is μs in both engines, scatter ~0): the true
 #   mapping agrees on the critical ratio; friction × 1.3 moves it to 0.26 (differ); stiffness × 2
 #   moves the mean overlap by 2^(-2/3) = 0.63× (Hertz), far outside ±10 % (differ). Each moves one
@@ -228,12 +225,11 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     each, by what each alteration alone predicts, so each verdict is its own alteration's. On a
     sliding flat the critical-state ratio is μs whatever the stiffness (so 1.3 × 0.2 = 0.26), and the
     mean overlap follows the stiffness (Hertz: × 2^(−2/3) = 0.63 at one load) whatever the friction.
-    Measured alone over 1 mm of shear (0.5 mm now: see above TINY_PERIODIC_TABLES), 2026-11-23 (2 cores
-    shared with the study campaign): true: ratio −0.0002 [−0.0010, +0.0006] → agree, overlap +0.00022
-    [+0.00004, +0.00040] against ±0.00129 → agree (with each engine consolidating its own specimen it
-    was undecided at 3 seeds); friction: ratio 0.2596 → differ; stiffness × 2: overlap 0.01279 →
-    0.00885 (× 0.69) → differ. Rolling off is not in this test: on a sliding flat it changes nothing,
-    and on the rolling-held flat at μs 0.5 its effect needs the standard set's cell (the power table,
+    Measured (0.5 mm of shear, 3 seeds): true: ratio −0.0008 [−0.0044, +0.0027] against ±0.03 →
+    agree, overlap +0.00018 against ±0.0013 → agree (with each engine consolidating its own specimen
+    it was undecided at 3 seeds); friction × 1.3: YADE ratio 0.258 → differ; stiffness × 2: overlap
+    × 0.71 → differ. Rolling off is not in this test: on a sliding flat it changes nothing, and on the
+    rolling-held flat at μs 0.5 its effect needs the standard set's cell (the power table,
     bench/crosscheck_power.py)."""
     path, true_out, true_report = true_mapping
     assert not true_report.missing
@@ -256,7 +252,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     ratio, overlap = bad.loc["residual_stress_ratio"], bad.loc["overlap_mean_d50"]
     assert ratio.verdict == "differ" and ratio.yade == pytest.approx(0.26, abs=0.01)
     assert overlap.verdict == "differ"
-    assert 0.55 < overlap.yade / j.loc["overlap_mean_d50", "yade"] < 0.75       # Hertz 0.63; 0.69 (1 mm), 0.71
+    assert 0.55 < overlap.yade / j.loc["overlap_mean_d50", "yade"] < 0.75       # Hertz 0.63; measured 0.71
     # the per-seed rows are information, never a verdict
     seeds = report.seeds[report.seeds.metric == "residual_stress_ratio"]
     assert len(seeds) == 3 and seeds.verdict.isna().all()

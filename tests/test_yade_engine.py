@@ -54,8 +54,8 @@ def peak_ratio(history, window=9):
 
 
 def test_flat_surface_ratio_equals_particle_surface_friction(yrun):
-    # μs 0 carries no tangential force from the first step of the shear (measured over 1 mm: 0.000 in
-    # every 0.25 mm): half the shear, its second half read
+    # μs 0 carries no tangential force from the first step of the shear (0.000 in every 0.25 mm of
+    # 1 mm): half the shear suffices, its second half read
     for mu, shear in ((0.0, 0.5e-3), (0.2, TINY["shear_distance"])):
         _, res = yrun(tiny(friction_ps=mu, shear_distance=shear))
         assert steady_ratio(res.history, shear / 2) == pytest.approx(mu, abs=0.05 if mu else 0.01)
@@ -300,9 +300,8 @@ def test_facet_contacts_carry_the_liggghts_wall_rolling_law(yrun):
 
 
 # ---- the periodic device (engines/device.py `_periodic`), as tests/test_liggghts.py's periodic tests;
-# 1 mm of shear, as the walled cases (formerly 1.5 mm: measured 2026-11-28, the flat at μs 0.2 read
-# 0.195-0.200 over 0.5-1 mm, 0.201 over 1-1.5 mm; the surface and the bed travel 1 mm, more than a
-# grain's diameter, past x = L: what wraps still has to wrap)
+# 1 mm of shear, as the walled cases: the flat at μs 0.2 reads 0.195-0.200 over 0.5-1 mm, and the
+# surface and the bed travel 1 mm, more than a grain's diameter, past x = L, so what wraps has to wrap
 PERIODIC = dict(device="periodic", friction_ps=0.5, shear_distance=1e-3)
 
 
