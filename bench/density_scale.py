@@ -84,7 +84,7 @@ def write_card(card_path: Path, span: float, offset: float) -> None:
 def main(argv=None) -> None:
     from interphase.campaign.calibrate_cell import nominal, read_record
     from interphase.campaign.cell_records import index_void_ratios
-    from interphase.campaign.density import MAP_SEEDS, own_relative_density, void_ratio_map
+    from interphase.campaign.density import MAP_SEEDS, own_relative_density, read_limits, void_ratio_map
     from interphase.campaign.density_scale import fit_scale, model_dr
     from interphase.campaign.folders import element_runs
     from interphase.soil import load_card
@@ -113,11 +113,12 @@ def main(argv=None) -> None:
     span, offset = fit_scale([r.relative_density for r in records], dr_model)
 
     prep_map, e_map = void_ratio_map(card, stress, seeds, output=out)
+    index = read_limits(card, seeds, stress=stress, output=out)
     rng = np.random.default_rng(20261128)
     boot = []
     for _ in range(BOOT):
         ps = [p for p, _ in anchors(runs, records, rng)]
-        d = [model_dr(prep_map, e_map, p) for p in ps]
+        d = [model_dr(prep_map, e_map, p, index) for p in ps]
         boot.append([*ps, *fit_scale([r.relative_density for r in records], d)])
     boot = np.asarray(boot)
     lo, hi = np.percentile(boot, [2.5, 97.5], axis=0)

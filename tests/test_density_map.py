@@ -4,6 +4,7 @@ turned into before any engine runs."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -62,17 +63,17 @@ def test_a_picked_preparation_is_kept_for_its_map_and_dropped_with_other_grains_
     case = {"test": "triaxial", "n_grains": 150, "friction_pp": 0.43, "normal_stress": 100e3,
             "gradation": {"sizes": [1e-4, 2e-4], "fractions": [0.5, 0.5]}}
     path = tmp_path / "density-x-100kPa.toml"
+    lim = (0.53, 0.83)
     first = _Picks(path, case, [1, 2])
-    assert first.get(0.7847, 1.0) is None
-    first.put(0.7847, 1.0, 0.1115)
-    assert _Picks(path, case, [1, 2]).get(0.7847, 1.0) == 0.1115
-    assert _Picks(path, case, [1, 2]).get(0.7847, 1.0, -0.5) is None              # a scale with an offset
-    assert _Picks(path, case, [1, 2]).get(0.63, 1.0) is None                      # another Dr: not picked yet
-    assert _Picks(path, case, [1, 2]).get(0.7847, 0.64) is None                   # another density scale
-    assert _Picks(path, case, [3, 4]).get(0.7847, 1.0) is None                    # other map seeds
-    assert _Picks(path, {**case, "friction_pp": 0.5}, [1, 2]).get(0.7847, 1.0) is None   # other grains
+    assert first.get(0.7847, lim) is None
+    first.put(0.7847, lim, 0.1115)
+    assert _Picks(path, case, [1, 2]).get(0.7847, lim) == 0.1115
+    assert _Picks(path, case, [1, 2]).get(0.63, lim) is None                      # another Dr: not picked yet
+    assert _Picks(path, case, [1, 2]).get(0.7847, (0.64, 0.83)) is None           # another density scale
+    assert _Picks(path, case, [3, 4]).get(0.7847, lim) is None                    # other map seeds
+    assert _Picks(path, {**case, "friction_pp": 0.5}, [1, 2]).get(0.7847, lim) is None   # other grains
     again = _Picks(path, case, [1, 2])
-    again.put(0.63, 1.0, 0.2269)
+    again.put(0.63, lim, 0.2269)
     assert sorted(_Picks(path, case, [1, 2]).picks.values()) == [0.1115, 0.2269]
 
 
@@ -97,16 +98,53 @@ def test_a_refit_of_the_same_name_keeps_each_cards_map_and_takes_over_an_unnamed
     (pa, ca), (pb, cb) = _map_file(first, 100e3, None, runs, [1, 2]), _map_file(refit, 100e3, None, runs, [1, 2])
     assert pa != pb and pa.name.startswith("density-sand-100kPa-")
     assert _map_file(first, 100e3, None, runs, [3, 4])[0] != pa                      # other map seeds
-    _Picks(pa, ca, [1, 2]).put(0.78, 1.0, 0.1115)
-    _Picks(pb, cb, [1, 2]).put(0.78, 1.0, 0.2269)
-    assert _Picks(*_map_file(first, 100e3, None, runs, [1, 2]), [1, 2]).get(0.78, 1.0) == 0.1115
+    _Picks(pa, ca, [1, 2]).put(0.78, (0.5, 0.8), 0.1115)
+    _Picks(pb, cb, [1, 2]).put(0.78, (0.5, 0.8), 0.2269)
+    assert _Picks(*_map_file(first, 100e3, None, runs, [1, 2]), [1, 2]).get(0.78, (0.5, 0.8)) == 0.1115
     # an unnamed map of the first card's grains (as written before the name carried them), in a new folder
     old = tmp_path / "old"
     old.mkdir()
     legacy = old / "density-sand-100kPa.toml"
     write_campaign(legacy, name=legacy.stem, case=ca, sweep={"preparation": [0.0, 0.3115, 1.0], "seed": [1, 2]})
-    _Picks(legacy, ca, [1, 2]).put(0.78, 1.0, 0.3115)
+    _Picks(legacy, ca, [1, 2]).put(0.78, (0.5, 0.8), 0.3115)
     path, case = _map_file(first, 100e3, None, old, [1, 2])
-    assert path != legacy and _Picks(path, case, [1, 2]).get(0.78, 1.0) == 0.3115
+    assert path != legacy and _Picks(path, case, [1, 2]).get(0.78, (0.5, 0.8)) == 0.3115
     path, case = _map_file(refit, 100e3, None, old, [1, 2])
-    assert not path.exists() and _Picks(path, case, [1, 2]).get(0.78, 1.0) is None
+    assert not path.exists() and _Picks(path, case, [1, 2]).get(0.78, (0.5, 0.8)) is None
+
+
+def test_a_relative_density_is_one_void_ratio_at_every_stress(tmp_path, monkeypatch):
+    """The limits a Dr is read on are the card's index limits ([density], measured at the reference
+    stress), not the map's ends at the test's stress: on a map that compresses with stress the same Dr
+    asks for the same e after consolidation (a looser preparation at the higher stress), as the
+    laboratory's Dr0 does. The maps are stand-ins (each real map point is a token run, tested in
+    test_cell.py); what is tested is which void ratio the inversion aims at."""
+    from interphase.campaign import density
+    from interphase.soil import load_card
+
+    card_path = tmp_path / "sand.toml"
+    card_path.write_text(
+        '[soil]\nname = "sand"\nd50 = 0.00014\ngradation = {sizes = [0.000112, 0.00014, 0.000168], fractions = [0.3, 0.4, 0.3]}\nshear_modulus = 500e6\nfriction_pp = 0.44\nrolling_friction = 0.46\n'
+        'preparation = 0.39\n\n[cell]\ntest = "triaxial"\nn_grains = 150\n\n'
+        '[density]\nreference_stress = 10000.0\ne_min = 0.53\ne_max = 0.83\nlab_span = 0.5\n')
+    card = load_card(card_path)
+    prep = [0.0, 0.25, 0.5, 0.75, 1.0]
+    base = np.array([0.53, 0.64, 0.73, 0.78, 0.83])
+    shift = {100e3: 0.01, 400e3: 0.05}                  # the whole map denser at the higher stress
+
+    def stand_in(card, stress, seeds, also=(), **kw):
+        points = sorted({*prep, *also})
+        return points, np.interp(points, prep, base - shift[stress])
+
+    monkeypatch.setattr(density, "void_ratio_map", stand_in)
+    out = tmp_path / "runs"
+    out.mkdir()
+    target = 0.83 - 0.5 * 0.8 * (0.83 - 0.53)           # Dr 0.8 on the index limits, lab_span 0.5: e 0.71
+    picked = {}
+    for s in shift:
+        p, limits = density.preparation_at(card, 0.8, s, [1, 2], output=out)
+        assert limits == pytest.approx((0.83 - 0.5 * 0.30, 0.83))
+        assert np.interp(p, prep, base - shift[s]) == pytest.approx(target, abs=1e-3)
+        picked[s] = p
+    assert picked[400e3] > picked[100e3]
+    assert density.own_relative_density(card, 400e3, [1, 2], picked[400e3], output=out) == pytest.approx(0.4, abs=0.01)

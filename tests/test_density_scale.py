@@ -37,10 +37,13 @@ def test_the_tolerances_weigh_the_two_angles_as_a_calibration_does():
     assert p_phi == pytest.approx(0.5, abs=1e-3) and p_psi == pytest.approx(0.75, abs=1e-3)
 
 
-def test_the_model_dr_of_a_preparation_is_read_on_the_maps_own_limits():
+def test_the_model_dr_of_a_preparation_is_read_on_the_index_limits_given():
     prep, e = [0.0, 0.25, 0.5, 0.75, 1.0, 2.5], [0.53, 0.64, 0.73, 0.78, 0.83, 0.72]
-    assert model_dr(prep, e, 0.0) == pytest.approx(1.0) and model_dr(prep, e, 1.0) == pytest.approx(0.0)
-    assert model_dr(prep, e, 0.5) == pytest.approx((0.83 - 0.73) / 0.30)     # the point at 2.5 is not read
+    assert model_dr(prep, e, 0.0, (0.53, 0.83)) == pytest.approx(1.0)
+    assert model_dr(prep, e, 1.0, (0.53, 0.83)) == pytest.approx(0.0)
+    assert model_dr(prep, e, 0.5, (0.53, 0.83)) == pytest.approx((0.83 - 0.73) / 0.30)   # the point at 2.5 is not read
+    # index limits looser than the map at this stress: the same specimen reads denser
+    assert model_dr(prep, e, 0.5, (0.55, 0.86)) == pytest.approx((0.86 - 0.73) / 0.31)
 
 
 @given(span=st.floats(0.2, 4.0), offset=st.floats(-3.0, 1.0),

@@ -34,6 +34,7 @@ ELEMENT_DEFAULTS = {"box_length_d50": 30.0, "box_height_d50": 20.0, "shear_veloc
 #: the laboratory's element test on the periodic cell (`[cell]`, engines/cell.py): its test and protocol
 #: (docs/soils.md: the specimen size converged for φ_peak and ψ_max, the rate quasi-static)
 CELL_DEFAULTS = {"test": "triaxial", "n_grains": 1000, "strain_rate": 10.0, "axial_strain": 0.2}
+DR_LIMITS = ("index", "test")       # [density] dr_limits: what a relative density is read on (SoilCard.dr_limits)
 CARD_KEYS = ("soil", "element", "cell", "density", "target", "posterior", "achieved", "verification", "calibration",
              "criterion")
 
@@ -93,6 +94,16 @@ class SoilCard:
         beyond what the protocol packs; a Dr mapped there is made at the loosest packing (preparation 1)
         and reported at the Dr it reached."""
         return float(self.extra.get("density", {}).get("lab_offset", 0.0))
+
+    @property
+    def dr_limits(self) -> str:
+        """The void ratios a relative density is read on ([density] dr_limits): "index" (the default),
+        the model's index limits at the reference stress, so a Dr is one void ratio after
+        consolidation at every stress, as the laboratory's Dr0 is; "test", the limits the preparation
+        makes at the test's stress, for grains that compress far more than the sand (their overlap
+        is not a denser fabric). Which one a card's grains need: docs/soils.md, "Density by relative
+        density"."""
+        return str(self.extra.get("density", {}).get("dr_limits", "index"))
 
     @property
     def quick(self) -> bool:
@@ -215,6 +226,10 @@ def _check_cell(card: SoilCard, bad) -> None:
                                    and math.isfinite(offset)):
         raise bad("density", "lab_offset", f"must be a number, got {offset!r}",
                   "the model's Dr a laboratory Dr of 0 maps onto (bench/density_scale.py fits it), e.g. -1.2")
+    limits = card.extra.get("density", {}).get("dr_limits")
+    if limits is not None and limits not in DR_LIMITS:
+        raise bad("density", "dr_limits", f"unknown limits {limits!r}",
+                  'use "index" (the model\'s index void ratios, the default) or "test" (the limits at the test\'s stress)')
     if card.cell["test"] not in ("triaxial", "biaxial"):
         raise bad("cell", "test", f"unknown cell test {card.cell['test']!r}", 'use "triaxial" (3D) or "biaxial" (2D)')
     try:

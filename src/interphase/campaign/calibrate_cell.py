@@ -241,8 +241,8 @@ def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
 
 
 def _lab_span(card: SoilCard, rec: Record, seeds, output: Path, executor, jobs, stream, rerun_failed):
-    """(lab_span, the model's own Dr at the fitted state at the record's stress): lab_span = that Dr
-    over the record's, so the laboratory's Dr maps back onto the fitted state and every other Dr onto
+    """(lab_span, the model's own Dr (on its index limits) of the fitted state at the record's stress):
+    lab_span = that Dr over the record's, so the laboratory's Dr maps back onto the fitted state and every other Dr onto
     the same share of the model's span (SoilCard.lab_span)."""
     from interphase.campaign.density import own_relative_density
 
@@ -315,9 +315,9 @@ def _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, strea
     density = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(target.cell["n_grains"]),
                "preparations": list(prep), "void_ratios": [round(float(v), 5) for v in e],
                "e_min": round(e_min, 5), "e_max": round(e_max, 5)}
+    card.extra["density"] = density         # the index limits _lab_span reads the fitted state on
     density["lab_span"], density["model_relative_density"] = _lab_span(
         card, target.record, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
-    card.extra["density"] = density
     achieved, achieved_prep, verification, n_final = _final(card, target, list(range(1, int(budget["final_seeds"]) + 1)),
                                              runs / f"final{tag}", executor, jobs, stream, rerun_failed)
     import pandas as pd

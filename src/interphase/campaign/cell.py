@@ -41,8 +41,8 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
     """The laboratory's element test (triaxial or biaxial, the card's [cell]) of `card` at each
     confining stress [Pa] on packing seeds `seeds`. At `relative_density` (a fraction), each stress's
     preparation is the one whose specimen consolidated to that stress has e = e_max − Dr (e_max − e_min),
-    the limits those the preparation makes at that stress (campaign.density.preparation_at: the
-    laboratory's Dr0 is after consolidation too); without it, the card's [cell] relative_density, else
+    on the model's index limits (campaign.density.preparation_at: as the laboratory's Dr0, one void
+    ratio after consolidation at every stress); without it, the card's [cell] relative_density, else
     the card's preparation. Either way the results carry the relative density on those limits.
     Returns CellResults."""
     from interphase.campaign.density import preparation_at

@@ -9,10 +9,10 @@ compression, averaged over the seeds. e_min = e at preparation 0 (frictionless g
 packing the protocol makes), e_max = e at preparation 1 (the grains' own friction). A
 preparation above 1 is outside these limits: it packed looser on 50 MPa grains and denser on the
 3D Karlsruhe card's 500 MPa ones (docs/soils.md, "Looser than the loosest").
-The laboratory's index tests are made at next to no stress; the reference stress is low for the same
-reason (the model's soft grains overlap less there; how much e still moves with stress is measured in
-docs/soils.md). The map e(preparation) between them is what
-`preparation_at` inverts at the stress a test is consolidated to.
+These are the model's index void ratios: the laboratory's are measured at next to no stress and its Dr0
+is read on them after consolidation, so a relative density is one void ratio at every stress. The
+map e(preparation) measured at the stress a test is consolidated to is what `preparation_at` inverts
+at that void ratio.
 
 The result is appended to the card as its [density] table; a card that has one keeps it (nothing
 measured is overwritten: delete the table to measure again).
@@ -65,15 +65,18 @@ def measure_density(card: SoilCard, seeds, *, output: Path | None = None, execut
 def preparation_at(card: SoilCard, relative_density: float | None, stress: float, seeds, *, test: str | None = None,
                    output: Path, executor=None, jobs=None, stream=None,
                    rerun_failed: bool = False) -> tuple[float | None, tuple[float, float]]:
-    """(preparation, (e_min, e_max)) at `stress` [Pa]: the limits are the void ratios the preparation
-    makes at that stress, frictionless (0) and at the grains' own friction (1), from the map
-    e(preparation) measured there (token compressions at PREPARATIONS on the first MAP_SEEDS of
-    `seeds`; resumable), read on the card's density scale (`lab_limits`); the preparation is that
-    map inverted at e = e_max − Dr (e_max − e_min), None without a relative density. Why the test's
-    stress and not the index tests' near-zero one: the soft grains squeeze (at G = 50 MPa a packing's
-    e falls ~0.07 from 10 to 100 kPa, docs/soils.md), a sand's barely; on limits at 10 kPa a dense
-    specimen at 100 kPa read Dr 1.5 and one Dr would mean looser and looser packings as the stress
-    rises.
+    """(preparation, (e_min, e_max)) at `stress` [Pa]. The limits are the model's index void ratios
+    (`read_limits`: the protocol's densest and loosest packings at REFERENCE_STRESS) read on the
+    card's density scale (`lab_limits`); the preparation is the one whose specimen, consolidated to
+    `stress`, has e = e_max − Dr (e_max − e_min): the map e(preparation) measured at `stress` (token
+    compressions at PREPARATIONS on the first MAP_SEEDS of `seeds`; resumable) inverted there; None
+    without a relative density. So a Dr is one void ratio after consolidation at every stress, as the
+    laboratory's Dr0 is (its index tests at next to no stress, e0 after consolidation). Limits read at
+    the test's stress instead drift denser with it (the 3D Karlsruhe card's grains: both limits fall
+    ~0.04 in e from 50 to 400 kPa), and that drift offset the spheres' own loss of strength with stress
+    (docs/soils.md, "Why the card did not weaken with stress"). A card whose grains compress far more
+    than the sand (overlap that is not a denser fabric) reads them at the test's stress instead
+    ([density] dr_limits = "test", SoilCard.dr_limits).
 
     The map is refined where it is read: e(preparation) is steep and curved near 0, where every Dr
     above ~0.55 lies (Karlsruhe card at 200 kPa: e 0.417 at 0, 0.454 at 0.061, 0.474 at 0.117, 0.521
@@ -85,7 +88,8 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     beside the map (`_Picks`) and returned as it is by every later call on that map: on a noisy map
     each refinement moves the inverse a little (150 grains at 100 kPa: 0.1102, 0.1163, 0.1115, 0.1105,
     0.1104 in turn), and a Dr read again must not make new specimens and rerun the seeds already
-    sheared on the first."""
+    sheared on the first. A target looser than the map's loosest point at `stress` is made at
+    preparation 1 and reported at the Dr it reached."""
     from interphase.errors import InputError
 
     if relative_density is not None and not 0 <= relative_density <= 1:
@@ -93,13 +97,12 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
-    prep, e = void_ratio_map(card, stress, seeds, **kw)
-    span, offset = card.lab_span, card.lab_offset
-    limits = lab_limits(*limits_of(prep, e), span, offset)
+    limits = lab_limits(*read_limits(card, seeds, stress=stress, **kw), card.lab_span, card.lab_offset)
     if relative_density is None:
         return None, limits
+    prep, e = void_ratio_map(card, stress, seeds, **kw)
     picks = _Picks(*_map_file(card, stress, test, output, seeds), seeds)
-    if (picked := picks.get(relative_density, span, offset)) is not None:
+    if (picked := picks.get(relative_density, limits)) is not None:
         return picked, limits
     target = limits[1] - relative_density * (limits[1] - limits[0])
     known = len(prep)
@@ -109,20 +112,36 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
         if guess in prep or len(prep) >= known + REFINE or np.min(np.abs(e - target)) <= E_TOL:
             break
         prep, e = void_ratio_map(card, stress, seeds, also=[guess], **kw)
-    picks.put(relative_density, span, guess, offset)
+    picks.put(relative_density, limits, guess)
     return guess, limits
+
+
+def read_limits(card: SoilCard, seeds, *, stress: float | None = None, test=None, output: Path, executor=None,
+                     jobs=None, stream=None, rerun_failed: bool = False) -> tuple[float, float]:
+    """The model's own (e_min, e_max) a relative density is read on (SoilCard.dr_limits): "index",
+    the card's [density] table (`campaign density`, measured at REFERENCE_STRESS), else the same map
+    measured in `output` on `seeds`; "test", the ends of the map at `stress` (resumable either way)."""
+    table = card.extra.get("density", {})
+    at = stress if card.dr_limits == "test" and stress is not None else REFERENCE_STRESS
+    if at == REFERENCE_STRESS and "e_min" in table and "e_max" in table:
+        return float(table["e_min"]), float(table["e_max"])
+    prep, e = void_ratio_map(card, at, seeds, test=test, output=output, executor=executor, jobs=jobs,
+                             stream=stream, rerun_failed=rerun_failed)
+    _finished(e, at, output)
+    return limits_of(prep, e)
 
 
 def own_relative_density(card: SoilCard, stress: float, seeds, preparation: float, *, output: Path, executor=None,
                          jobs=None, stream=None, rerun_failed: bool = False) -> float:
-    """The model's own Dr [-] (on its limits at `stress` [Pa], lab_span not applied) of the specimen
-    `preparation` makes there: the void-ratio map with that point added (the same token runs
-    `preparation_at` reads in `output`, so nothing runs twice)."""
+    """The model's own Dr [-] (on the limits its card reads a Dr on, `read_limits`; no lab_span) of the
+    specimen `preparation` makes when consolidated to `stress` [Pa]: the void-ratio map there with
+    that point added (the same token runs `preparation_at` reads in `output`, so nothing runs twice)."""
     p = round(float(preparation), 4)
-    prep, e = void_ratio_map(card, stress, list(seeds)[:MAP_SEEDS], output=output, also=[p], executor=executor,
-                             jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    seeds = list(seeds)[:MAP_SEEDS]
+    kw = dict(output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
+    e_min, e_max = read_limits(card, seeds, stress=stress, **kw)
+    prep, e = void_ratio_map(card, stress, seeds, also=[p], **kw)
     _finished(e, stress, output)
-    e_min, e_max = limits_of(prep, e)
     return float((e_max - e[prep.index(p)]) / (e_max - e_min))
 
 
@@ -225,9 +244,9 @@ def _canonical(case: dict) -> dict:
 
 class _Picks:
     """The preparation picked for each relative density on one map, in a JSON file beside the map's
-    campaign file, keyed by the Dr and the scale it was read on (lab_span, and lab_offset when not
-    0: together they fix the target e on the map); kept only while it belongs to the same grains and
-    seeds (as `_mapped` keeps points)."""
+    campaign file, keyed by the Dr and the limits it was read on (the index limits on the card's
+    scale: together they fix the target e on the map); kept only while it belongs to the same grains
+    and seeds (as `_mapped` keeps points)."""
 
     def __init__(self, map_path: Path, case: dict, seeds):
         self.path = map_path.with_suffix(".picks.json")
@@ -236,15 +255,14 @@ class _Picks:
         self.picks = data.get("picks", {}) if {k: data.get(k) for k in self.key} == self.key else {}
 
     @staticmethod
-    def _key(relative_density: float, lab_span: float, lab_offset: float = 0.0) -> str:
-        key = f"Dr {relative_density:.6f} on lab_span {lab_span:.6f}"
-        return key + (f" lab_offset {lab_offset:.6f}" if lab_offset else "")
+    def _key(relative_density: float, limits: tuple[float, float]) -> str:
+        return f"Dr {relative_density:.6f} on e {limits[0]:.6f} to {limits[1]:.6f}"
 
-    def get(self, relative_density: float, lab_span: float, lab_offset: float = 0.0) -> float | None:
-        return self.picks.get(self._key(relative_density, lab_span, lab_offset))
+    def get(self, relative_density: float, limits: tuple[float, float]) -> float | None:
+        return self.picks.get(self._key(relative_density, limits))
 
-    def put(self, relative_density: float, lab_span: float, preparation: float, lab_offset: float = 0.0) -> None:
-        self.picks[self._key(relative_density, lab_span, lab_offset)] = preparation
+    def put(self, relative_density: float, limits: tuple[float, float], preparation: float) -> None:
+        self.picks[self._key(relative_density, limits)] = preparation
         self.path.write_text(json.dumps({**self.key, "picks": self.picks}, indent=1) + "\n")
 
 

@@ -38,15 +38,14 @@ def anchor_preparation(prep, phi, psi, lab_phi: float, lab_psi: float, tolerance
     return float(grid[i]), float(m[i])
 
 
-def model_dr(prep_map, e_map, preparation: float) -> float:
-    """The model's own Dr [-] of a preparation on a void-ratio map (preparations, seed-mean e):
-    (e_max − e) / (e_max − e_min) with e_min, e_max at preparations 0 and 1, e interpolated."""
-    from interphase.campaign.density import limits_of
-
+def model_dr(prep_map, e_map, preparation: float, limits: tuple[float, float]) -> float:
+    """The model's own Dr [-] of a preparation on a void-ratio map (preparations, seed-mean e at the
+    test's stress) read on the model's index limits (e_min, e_max; density.read_limits):
+    (e_max − e) / (e_max − e_min), e interpolated; points above preparation 1 are not read."""
     p, e = np.asarray(prep_map, float), np.asarray(e_map, float)
     keep = p <= 1.0
     o = np.argsort(p[keep])
-    e_min, e_max = limits_of(p, e)
+    e_min, e_max = limits
     return float((e_max - np.interp(preparation, p[keep][o], e[keep][o])) / (e_max - e_min))
 
 
