@@ -1,6 +1,6 @@
 """Why the Karlsruhe card does not lose strength with stress: the sand's and the spheres' φ_peak,
 ψ_max and void ratio at large strain against σ3′ at a fixed initial void ratio (docs/soils.md,
-"Karlsruhe fine sand", the paragraph "Why the spheres do not weaken with stress").
+"Karlsruhe fine sand", the paragraph "Why the card did not weaken with stress").
 
     PYTHONPATH=src python bench/stress_dependence.py [--runs DIR ...] [--save CSV] [--table CSV]
 
