@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -70,13 +68,13 @@ def test_monotone_in_friction_and_never_below_the_flat(fit):
         assert all(b >= c - 1e-9 for c, b in zip(deltas, deltas[1:])), (fit, a, np.round(deltas, 2))
 
 
-def test_validate_on_a_lab_flat_is_not_above_the_surface_friction(tmp_path):
+def test_validate_on_a_lab_flat_is_not_above_the_surface_friction(tmp_path, capsys):
     lab = tmp_path / "lab.csv"
     lab.write_text("soil,d50_mm,surface,asperity_height_mm,asperity_width_mm,root_spacing_mm,normal_stress_kpa,"
                    "delta_peak_deg,soil_phi_peak_deg,source,table_or_figure\n"
                    "Ottawa 20/30 sand (synthetic),0.72,flat,,,,100,12,36,synthetic test row,none\n")
-    out = subprocess.run([sys.executable, "-m", "interphase.cli", "validate", str(lab), "-o", str(tmp_path / "v"),
-                          "--json"], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    (row,) = json.loads(out.stdout)["table"]
+    code = main(["validate", str(lab), "-o", str(tmp_path / "v"), "--json"])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    (row,) = json.loads(out.out)["table"]
     assert row["delta_predicted_deg"] == pytest.approx(math.degrees(math.atan(0.2)), abs=1e-6)

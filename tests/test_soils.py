@@ -67,13 +67,15 @@ def test_yade_runs_a_prepared_case_with_its_own_driver_and_every_other_as_before
                                     pytest.param("yade", marks=pytest.mark.yade)])
 def test_a_dense_specimen_is_deposited_frictionless_and_shears_at_the_grains_own_friction(tmp_path, engine):
     """Both engines: at the start of the shear the grain contacts carry (almost) no tangential force
-    (deposited with friction 0), by its end the sliding ones sit at the grains' μ = 0.5."""
+    (deposited with friction 0), by its end the sliding ones sit at the grains' μ = 0.5. Half a
+    millimetre of shear, one snapshot at its start and one at its end: the sliding contacts sit at μ by
+    then (the top 5 % read 0.511 in LIGGGHTS and 0.500 in YADE there, as at 1 and 1.5 mm)."""
     import pandas as pd
 
     toml = tmp_path / "dense.toml"
     toml.write_text('[case]\ntest = "box"\ndevice = "periodic"\ngradation = "poly"\nshear_modulus = 50e6\n'
                     'friction_pp = 0.5\nrolling_friction = 0.3\npreparation = "dense"\nshear_velocity = 0.05\n'
-                    'shear_distance = 0.0015\nsnapshot_every = 0.0005\nbox_length_d50 = 12.0\nbox_height_d50 = 8.0\n')
+                    'shear_distance = 0.0005\nsnapshot_every = 0.0005\nbox_length_d50 = 12.0\nbox_height_d50 = 8.0\n')
     assert main(["run-case", str(toml), "-o", str(tmp_path / "run"), "--engine", engine]) == 0
     c = pd.read_parquet(tmp_path / "run" / "contacts.parquet", columns=["snapshot", "kind", "fn", "ft"])
     pp = c[(c["kind"] == "pp") & (c["fn"] > 0)]
@@ -214,11 +216,14 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
 
     monkeypatch.chdir(tmp_path)
     target = tmp_path / "tiny.toml"
-    # the suite's target with 2 samples, not 3: the machinery (sampling, posterior, card, final element
-    # test at the target and the held-out stress, read back) is the same, one run fewer
+    # the suite's target with 2 samples, not 3, and its final element test on 1 seed, not 2: the
+    # machinery (sampling, posterior, card, final element test at the target and the held-out stress,
+    # read back) is the same, three runs fewer; of the final checks the verdict and the difference are
+    # read, and one seed gives both (no interval: "undecided")
     text = (DATA / "tiny_target.toml").read_text()
-    assert "quick = {samples = 3," in text
-    target.write_text(text.replace("quick = {samples = 3,", "quick = {samples = 2,", 1))
+    assert "quick = {samples = 3, iterations = 1, seeds = 1, final_seeds = 2}" in text
+    target.write_text(text.replace("quick = {samples = 3, iterations = 1, seeds = 1, final_seeds = 2}",
+                                   "quick = {samples = 2, iterations = 1, seeds = 1, final_seeds = 1}", 1))
     assert main(["calibrate", str(target), "--quick", "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     card = load_card(tmp_path / "soils" / "tiny-quick.toml")         # beside the target; a quick card says so
@@ -226,9 +231,9 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     assert card.extra["target"]["source"].startswith("synthetic")
     for k, (lo, hi) in {"friction_pp": (0.3, 0.8), "rolling_friction": (0.2, 0.8)}.items():
         assert lo <= card.soil[k] <= hi and lo <= res["posterior"][k]["lo"] <= res["posterior"][k]["hi"] <= hi
-    assert res["calibration"]["runs"] == 2 + 2 * 2 and len(res["verification"]) == 1
+    assert res["calibration"]["runs"] == 2 + 2 * 1 and len(res["verification"]) == 1
     (check,) = res["verification"][0]["checks"]
-    assert check["quantity"] == "phi_peak_deg" and check["verdict"] in ("within", "outside", "undecided")
+    assert check["quantity"] == "phi_peak_deg" and check["verdict"] == "undecided"    # one seed decides nothing
     assert check["difference"] == pytest.approx(check["measured"] - 37.0)
     runs = tmp_path / "runs" / "calibrate" / "tiny-quick"
     assert (runs / "element").is_dir() and (runs / "samples-quick.csv").is_file()   # --runs governs every run
@@ -240,7 +245,7 @@ def test_quick_calibration_writes_a_card_that_the_element_test_then_matches(tmp_
     captured = capsys.readouterr()
     assert json.loads(captured.out)["chosen"] == res["chosen"] and "read back" in captured.err
     assert " to run [" not in captured.err and card.path.read_bytes() == before
-    assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "2", "--runs", str(runs / "element"),
+    assert main(["element", str(card.path), "--normal-stress", "100e3", "--seeds", "1", "--runs", str(runs / "element"),
                  "--json"]) == 0
     captured = capsys.readouterr()
     measured = json.loads(captured.out)
