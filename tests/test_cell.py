@@ -132,6 +132,21 @@ def test_a_density_scale_with_an_offset_moves_both_ends_and_a_bad_offset_is_refu
         load_card(path)
 
 
+def test_a_card_names_the_limits_a_relative_density_is_read_on_and_a_bad_name_is_refused(tmp_path):
+    from interphase.soil import load_card
+
+    path = tmp_path / "s.toml"
+    base = CARD.format(name="s", test="triaxial", n=200, strain=0.03)
+    path.write_text(base)
+    assert load_card(path).dr_limits == "index"          # the laboratory's reading: one e0 at every stress
+    path.write_text(base + '\n[density]\ndr_limits = "test"\n')
+    assert load_card(path).dr_limits == "test"
+    path.write_text(base + '\n[density]\ndr_limits = "consolidated"\n')
+    with pytest.raises(InputError, match=r"dr_limits.*unknown limits") as err:
+        load_card(path)
+    assert str(path) in str(err.value) and '"index"' in str(err.value)
+
+
 def test_yade_refuses_the_cell_with_the_engine_that_runs_it():
     from interphase.engines.yade import Yade
 

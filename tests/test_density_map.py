@@ -148,3 +148,34 @@ def test_a_relative_density_is_one_void_ratio_at_every_stress(tmp_path, monkeypa
         picked[s] = p
     assert picked[400e3] > picked[100e3]
     assert density.own_relative_density(card, 400e3, [1, 2], picked[400e3], output=out) == pytest.approx(0.4, abs=0.01)
+
+
+def test_a_card_that_reads_dr_at_the_tests_stress_aims_at_that_maps_own_span(tmp_path, monkeypatch):
+    """[density] dr_limits = "test" (grains that compress far more than the sand): the limits are the
+    ends of the map at the test's stress, so a Dr is the same share of that map's span at every
+    stress (the index limits in the card are not read)."""
+    from interphase.campaign import density
+    from interphase.soil import load_card
+
+    card_path = tmp_path / "discs.toml"
+    card_path.write_text(
+        '[soil]\nname = "discs"\nd50 = 0.00014\ngradation = {sizes = [0.000112, 0.00014, 0.000168], '
+        'fractions = [0.3, 0.4, 0.3]}\nshear_modulus = 50e6\nfriction_pp = 0.45\nrolling_friction = 0.6\n'
+        'preparation = 0.44\n\n[cell]\ntest = "biaxial"\nn_grains = 150\n\n'
+        '[density]\nreference_stress = 10000.0\ne_min = 0.17\ne_max = 0.28\nlab_span = 1.0\ndr_limits = "test"\n')
+    card = load_card(card_path)
+    prep = [0.0, 0.25, 0.5, 0.75, 1.0]
+    base = np.array([0.134, 0.17, 0.20, 0.222, 0.238])
+    shift = {100e3: 0.0, 200e3: 0.03}
+
+    def stand_in(card, stress, seeds, also=(), **kw):
+        points = sorted({*prep, *also})
+        return points, np.interp(points, prep, base - shift[stress])
+
+    monkeypatch.setattr(density, "void_ratio_map", stand_in)
+    out = tmp_path / "runs"
+    out.mkdir()
+    for s in shift:
+        p, limits = density.preparation_at(card, 0.5, s, [1, 2], output=out)
+        assert limits == pytest.approx((0.134 - shift[s], 0.238 - shift[s]))
+        assert np.interp(p, prep, base - shift[s]) == pytest.approx(0.186 - shift[s], abs=1e-3)
