@@ -99,11 +99,15 @@ def need_binary(name: str) -> str:
 @pytest.fixture(scope="session")
 def quick_campaign(tmp_path_factory) -> Path:
     """campaigns/quick.toml with a smaller sweep (Rt/D50 0.5 and 1 at μs 0.2, seeds 1 and 2: 4
-    interface cases and their 2 box tests) and 2 mm of shear, not its 3 mm (the shear is ~80 % of a
-    case's engine time; over 3 mm four of the six peaks lay at 0.9-1.6 mm, a box
-    seed's at 2.4 mm and one Rt 1 seed's at the end: what the tests read does not need the third mm),
-    run for real with LIGGGHTS into a temporary output folder; returns the path of the campaign file
-    that points there. Run once per test session; test_stale and test_restore rerun its cases as they are."""
+    interface cases and their 2 box tests) and 1 mm of shear, not its 3 mm (the shear is most of a
+    case's engine time), run for real with LIGGGHTS into a temporary output folder; returns the path
+    of the campaign file that points there. Run once per test session; test_stale, test_restore and
+    test_store_verify rerun its cases as they are.
+    Over 1 mm the runs are a pipeline's input, not a soil's strength: the box tests have not peaked
+    (one seed's peak is at the end, tan φ 0.22) and E reads 1.5-1.8. No test reads the physics; what
+    they read holds with margin: 5 contact snapshots a run (animation test: more than 3), 209 grains
+    and 19 surface contacts in the network figure's peak snapshot (more than 50, at least 1), the
+    restored campaign's ensembles within 0.17 % of the original's (test_restore: 1 %)."""
     from interphase.cli import main
 
     need_binary("liggghts")
@@ -112,7 +116,7 @@ def quick_campaign(tmp_path_factory) -> Path:
     toml = tmp / "quick.toml"
     text = text.split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5, 1]\nfriction_ps = [0.2]\nseed = [1, 2]\n"
     assert "\nshear_distance = 0.003\n" in text
-    text = text.replace("\nshear_distance = 0.003\n", "\nshear_distance = 0.002\n", 1)
+    text = text.replace("\nshear_distance = 0.003\n", "\nshear_distance = 0.001\n", 1)
     text = "\n".join(line for line in text.splitlines() if not line.startswith("output ="))
     toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
     assert main(["run", str(toml)]) == 0
