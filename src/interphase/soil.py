@@ -79,8 +79,8 @@ class SoilCard:
     @property
     def lab_span(self) -> float:
         """The share of the model's span of void ratios (frictionless preparation to the grains' own
-        friction, on the limits `dr_limits` names) that the laboratory's e_max − e_min stands for ([density]
-        lab_span, set by a calibration against records: the model's Dr at the fitted state over the
+        friction, on the limits `dr_limits` names) that the laboratory's e_max − e_min stands for
+        ([density] lab_span, set by a calibration against records: the model's Dr at the fitted state over the
         record's); a laboratory Dr maps onto e = e_max − Dr · lab_span · (e_max − e_min). 1 when the
         card has none: the model's own limits are the laboratory's."""
         return float(self.extra.get("density", {}).get("lab_span", 1.0))

@@ -241,9 +241,10 @@ def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
 
 
 def _lab_span(card: SoilCard, rec: Record, seeds, output: Path, executor, jobs, stream, rerun_failed):
-    """(lab_span, the model's own Dr (on its index limits) of the fitted state at the record's stress):
-    lab_span = that Dr over the record's, so the laboratory's Dr maps back onto the fitted state and every other Dr onto
-    the same share of the model's span (SoilCard.lab_span)."""
+    """(lab_span, the model's own Dr (on the limits the card reads a Dr on: density.read_limits) of the
+    fitted state at the record's stress): lab_span = that Dr over the record's, so the laboratory's Dr
+    maps back onto the fitted state and every other Dr onto the same share of the model's span
+    (SoilCard.lab_span)."""
     from interphase.campaign.density import own_relative_density
 
     model_dr = own_relative_density(card, nominal(rec.confining_stress), seeds, card.soil["preparation"],

@@ -117,7 +117,7 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
 
 
 def read_limits(card: SoilCard, seeds, *, stress: float | None = None, test=None, output: Path, executor=None,
-                     jobs=None, stream=None, rerun_failed: bool = False) -> tuple[float, float]:
+                jobs=None, stream=None, rerun_failed: bool = False) -> tuple[float, float]:
     """The model's own (e_min, e_max) a relative density is read on (SoilCard.dr_limits): "index",
     the card's [density] table (`campaign density`, measured at REFERENCE_STRESS), else the same map
     measured in `output` on `seeds`; "test", the ends of the map at `stress` (resumable either way)."""
