@@ -113,7 +113,7 @@ def main(argv=None) -> None:
     span, offset = fit_scale([r.relative_density for r in records], dr_model)
 
     prep_map, e_map = void_ratio_map(card, stress, seeds, output=out)
-    index = read_limits(card, seeds, stress=stress, output=out)
+    index = read_limits(card, seeds, (prep_map, e_map), output=out)
     rng = np.random.default_rng(20261128)
     boot = []
     for _ in range(BOOT):

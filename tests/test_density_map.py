@@ -113,32 +113,44 @@ def test_a_refit_of_the_same_name_keeps_each_cards_map_and_takes_over_an_unnamed
     assert not path.exists() and _Picks(path, case, [1, 2]).get(0.78, (0.5, 0.8)) is None
 
 
+PREP5 = [0.0, 0.25, 0.5, 0.75, 1.0]
+
+
+def _card_on_maps(tmp_path, monkeypatch, soil: str, density_table: str, base, shift: dict):
+    """A card with `soil` fields and a [density] table, and `density.void_ratio_map` replaced by maps
+    e(PREP5) = base − shift[stress] (with any `also` points interpolated): which void ratio the
+    inversion aims at is what the tests read (each real map point is a token run, tested in
+    test_cell.py). Returns (density module, card, runs folder)."""
+    from interphase.campaign import density
+    from interphase.soil import load_card
+
+    path = tmp_path / "card.toml"
+    path.write_text('[soil]\nd50 = 0.00014\ngradation = {sizes = [0.000112, 0.00014, 0.000168], '
+                    'fractions = [0.3, 0.4, 0.3]}\n' + soil + "\n[density]\n" + density_table)
+    base = np.asarray(base, float)
+
+    def stand_in(card, stress, seeds, also=(), **kw):
+        points = sorted({*PREP5, *also})
+        return points, np.interp(points, PREP5, base - shift[stress])
+
+    monkeypatch.setattr(density, "void_ratio_map", stand_in)
+    out = tmp_path / "runs"
+    out.mkdir()
+    return density, load_card(path), out
+
+
 def test_a_relative_density_is_one_void_ratio_at_every_stress(tmp_path, monkeypatch):
     """The limits a Dr is read on are the card's index limits ([density], measured at the reference
     stress), not the map's ends at the test's stress: on a map that compresses with stress the same Dr
     asks for the same e after consolidation (a looser preparation at the higher stress), as the
     laboratory's Dr0 does. The maps are stand-ins (each real map point is a token run, tested in
     test_cell.py); what is tested is which void ratio the inversion aims at."""
-    from interphase.campaign import density
-    from interphase.soil import load_card
-
-    card_path = tmp_path / "sand.toml"
-    card_path.write_text(
-        '[soil]\nname = "sand"\nd50 = 0.00014\ngradation = {sizes = [0.000112, 0.00014, 0.000168], fractions = [0.3, 0.4, 0.3]}\nshear_modulus = 500e6\nfriction_pp = 0.44\nrolling_friction = 0.46\n'
-        'preparation = 0.39\n\n[cell]\ntest = "triaxial"\nn_grains = 150\n\n'
-        '[density]\nreference_stress = 10000.0\ne_min = 0.53\ne_max = 0.83\nlab_span = 0.5\n')
-    card = load_card(card_path)
-    prep = [0.0, 0.25, 0.5, 0.75, 1.0]
-    base = np.array([0.53, 0.64, 0.73, 0.78, 0.83])
-    shift = {100e3: 0.01, 400e3: 0.05}                  # the whole map denser at the higher stress
-
-    def stand_in(card, stress, seeds, also=(), **kw):
-        points = sorted({*prep, *also})
-        return points, np.interp(points, prep, base - shift[stress])
-
-    monkeypatch.setattr(density, "void_ratio_map", stand_in)
-    out = tmp_path / "runs"
-    out.mkdir()
+    base, shift = [0.53, 0.64, 0.73, 0.78, 0.83], {100e3: 0.01, 400e3: 0.05}   # denser at the higher stress
+    density, card, out = _card_on_maps(
+        tmp_path, monkeypatch, 'name = "sand"\nshear_modulus = 500e6\nfriction_pp = 0.44\nrolling_friction = 0.46\n'
+        'preparation = 0.39\n\n[cell]\ntest = "triaxial"\nn_grains = 150\n',
+        "reference_stress = 10000.0\ne_min = 0.53\ne_max = 0.83\nlab_span = 0.5\n", base, shift)
+    prep, base = PREP5, np.asarray(base)
     target = 0.83 - 0.5 * 0.8 * (0.83 - 0.53)           # Dr 0.8 on the index limits, lab_span 0.5: e 0.71
     picked = {}
     for s in shift:
@@ -154,27 +166,12 @@ def test_a_card_that_reads_dr_at_the_tests_stress_aims_at_that_maps_own_span(tmp
     """[density] dr_limits = "test" (grains that compress far more than the sand): the limits are the
     ends of the map at the test's stress, so a Dr is the same share of that map's span at every
     stress (the index limits in the card are not read)."""
-    from interphase.campaign import density
-    from interphase.soil import load_card
-
-    card_path = tmp_path / "discs.toml"
-    card_path.write_text(
-        '[soil]\nname = "discs"\nd50 = 0.00014\ngradation = {sizes = [0.000112, 0.00014, 0.000168], '
-        'fractions = [0.3, 0.4, 0.3]}\nshear_modulus = 50e6\nfriction_pp = 0.45\nrolling_friction = 0.6\n'
-        'preparation = 0.44\n\n[cell]\ntest = "biaxial"\nn_grains = 150\n\n'
-        '[density]\nreference_stress = 10000.0\ne_min = 0.17\ne_max = 0.28\nlab_span = 1.0\ndr_limits = "test"\n')
-    card = load_card(card_path)
-    prep = [0.0, 0.25, 0.5, 0.75, 1.0]
-    base = np.array([0.134, 0.17, 0.20, 0.222, 0.238])
-    shift = {100e3: 0.0, 200e3: 0.03}
-
-    def stand_in(card, stress, seeds, also=(), **kw):
-        points = sorted({*prep, *also})
-        return points, np.interp(points, prep, base - shift[stress])
-
-    monkeypatch.setattr(density, "void_ratio_map", stand_in)
-    out = tmp_path / "runs"
-    out.mkdir()
+    base, shift = [0.134, 0.17, 0.20, 0.222, 0.238], {100e3: 0.0, 200e3: 0.03}
+    density, card, out = _card_on_maps(
+        tmp_path, monkeypatch, 'name = "discs"\nshear_modulus = 50e6\nfriction_pp = 0.45\nrolling_friction = 0.6\n'
+        'preparation = 0.44\n\n[cell]\ntest = "biaxial"\nn_grains = 150\n',
+        'reference_stress = 10000.0\ne_min = 0.17\ne_max = 0.28\nlab_span = 1.0\ndr_limits = "test"\n', base, shift)
+    prep, base = PREP5, np.asarray(base)
     for s in shift:
         p, limits = density.preparation_at(card, 0.5, s, [1, 2], output=out)
         assert limits == pytest.approx((0.134 - shift[s], 0.238 - shift[s]))

@@ -97,10 +97,13 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
                          where="--relative-density", fix="e.g. 0.81 for 81 %")
     kw = dict(test=test, output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
     seeds = list(seeds)[:MAP_SEEDS]
-    limits = lab_limits(*read_limits(card, seeds, stress=stress, **kw), card.lab_span, card.lab_offset)
+    # the map at the test's stress: the inversion needs it, and so do limits read there
+    needed = relative_density is not None or card.dr_limits == "test"
+    here = void_ratio_map(card, stress, seeds, **kw) if needed else None
+    limits = lab_limits(*read_limits(card, seeds, here, **kw), card.lab_span, card.lab_offset)
     if relative_density is None:
         return None, limits
-    prep, e = void_ratio_map(card, stress, seeds, **kw)
+    prep, e = here
     picks = _Picks(*_map_file(card, stress, test, output, seeds), seeds)
     if (picked := picks.get(relative_density, limits)) is not None:
         return picked, limits
@@ -116,18 +119,20 @@ def preparation_at(card: SoilCard, relative_density: float | None, stress: float
     return guess, limits
 
 
-def read_limits(card: SoilCard, seeds, *, stress: float | None = None, test=None, output: Path, executor=None,
-                jobs=None, stream=None, rerun_failed: bool = False) -> tuple[float, float]:
+def read_limits(card: SoilCard, seeds, here=None, *, test=None, output: Path, executor=None, jobs=None,
+                stream=None, rerun_failed: bool = False) -> tuple[float, float]:
     """The model's own (e_min, e_max) a relative density is read on (SoilCard.dr_limits): "index",
     the card's [density] table (`campaign density`, measured at REFERENCE_STRESS), else the same map
-    measured in `output` on `seeds`; "test", the ends of the map at `stress` (resumable either way)."""
+    measured in `output` on `seeds` (resumable); "test", the ends of `here`, the map (preparations,
+    e) at the test's stress that the caller measured."""
+    if card.dr_limits == "test":
+        return limits_of(*here)
     table = card.extra.get("density", {})
-    at = stress if card.dr_limits == "test" and stress is not None else REFERENCE_STRESS
-    if at == REFERENCE_STRESS and "e_min" in table and "e_max" in table:
+    if "e_min" in table and "e_max" in table:
         return float(table["e_min"]), float(table["e_max"])
-    prep, e = void_ratio_map(card, at, seeds, test=test, output=output, executor=executor, jobs=jobs,
+    prep, e = void_ratio_map(card, REFERENCE_STRESS, seeds, test=test, output=output, executor=executor, jobs=jobs,
                              stream=stream, rerun_failed=rerun_failed)
-    _finished(e, at, output)
+    _finished(e, REFERENCE_STRESS, output)
     return limits_of(prep, e)
 
 
@@ -139,9 +144,9 @@ def own_relative_density(card: SoilCard, stress: float, seeds, preparation: floa
     p = round(float(preparation), 4)
     seeds = list(seeds)[:MAP_SEEDS]
     kw = dict(output=output, executor=executor, jobs=jobs, stream=stream, rerun_failed=rerun_failed)
-    e_min, e_max = read_limits(card, seeds, stress=stress, **kw)
     prep, e = void_ratio_map(card, stress, seeds, also=[p], **kw)
     _finished(e, stress, output)
+    e_min, e_max = read_limits(card, seeds, (prep, e), **kw)
     return float((e_max - e[prep.index(p)]) / (e_max - e_min))
 
 
