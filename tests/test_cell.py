@@ -2,7 +2,7 @@
 
 Engine-free: the Case's rules and identity, the rendered deck, the run summary's smoothing against
 the laboratory's own records, the seed ensemble on curves with a known answer. Real LIGGGHTS: tiny
-cells (150–200 grains, a few % of axial strain) hold σ3′, report e and stay quasi-static; the
+cells (100–200 grains, a few % of axial strain) hold σ3′, report e and stay quasi-static; the
 element command's JSON; `campaign density` measures e_min < e_max and never overwrites its table."""
 
 from __future__ import annotations
@@ -271,7 +271,11 @@ def density_card(tmp_path_factory):
     need_binary("liggghts")
     tmp = tmp_path_factory.mktemp("density")
     card = tmp / "tiny.toml"
-    card.write_text(CARD.format(name="tiny", test="triaxial", n=150, strain=0.03))
+    # 100 grains of G 20 MPa (not 150 of 50 MPa: a cell run's steps go as √G): the chain of runs below (the
+    # limits, the map at 100 kPa, its refinement, two shears) is the machinery's, and what the tests read
+    # of it held with more margin (the element test's Dr 0.049 from the asked one, 0.063 before; ≤ 0.2)
+    card.write_text(CARD.format(name="tiny", test="triaxial", n=100, strain=0.03)
+                    .replace("shear_modulus = 50e6", "shear_modulus = 20e6"))
     cmd = [sys.executable, "-m", "interphase.cli", "density", str(card), "--seeds", "1", "--runs", str(tmp / "runs"),
            "--json"]
     first = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
@@ -386,7 +390,7 @@ def test_the_ottawa_target_grading_is_its_sieve_curve():
 @pytest.mark.liggghts
 def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_checks(tmp_path):
     """`campaign calibrate` on a target that names a laboratory record (campaign/calibrate_cell.py):
-    the quickest budget on 100 grains at G 50 MPa to 2 % of axial strain — a run of the machinery, not a
+    the quickest budget on 100 grains at G 20 MPa to 2 % of axial strain — a run of the machinery, not a
     soil: the sand's target with the narrow grading of this file's cells (GRAINS, d50 0.14 mm as the sand's) for
     its 12-size sieve curve, whose smallest grains (0.083 mm) set a time step ~1.4× shorter."""
     need_binary("liggghts")
@@ -396,12 +400,14 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     text = text.replace(sieve, f"gradation = {{sizes = {list(GRAINS.sizes)}, fractions = {list(GRAINS.fractions)}}}")
     text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("card =", "runs =")))
     text = text.replace("n_grains = 1000", "n_grains = 100").replace("axial_strain = 0.4", "axial_strain = 0.02")
-    text = text.replace("shear_modulus = 500e6", "shear_modulus = 50e6")     # the card's G takes 3x the steps
+    # the card's G takes 5x the steps (a cell run's steps go as √G); at 20 MPa the fit's numbers below hold
+    # as at 50 MPa: the achieved Dr is the record's to 4 decimals, the preparation the card's exactly
+    text = text.replace("shear_modulus = 500e6", "shear_modulus = 20e6")
     # the ranges a first fit of a sand starts from (the shipped target's are a previous fit's intervals)
     for key, rng in {"friction_pp": "[0.2, 1.0]", "rolling_friction": "[0.05, 0.8]", "preparation": "[0.0, 1.0]"}.items():
         line = next(ln for ln in text.splitlines() if ln.startswith(f"{key} = ["))
         text = text.replace(line, f"{key} = {rng}")
-    assert "phi_cs_deg = 33.1" in text and "axial_strain = 0.02" in text and "shear_modulus = 50e6" in text
+    assert "phi_cs_deg = 33.1" in text and "axial_strain = 0.02" in text and "shear_modulus = 20e6" in text
     text += "\n[budget.quick]\nsamples = 2\n"
     target = tmp_path / "targets" / "tiny.toml"
     target.parent.mkdir()
