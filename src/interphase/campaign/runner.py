@@ -103,12 +103,12 @@ def _clean(folder: Path) -> None:
 
 def summarise(case: Case, results) -> tuple[dict, object]:
     """(flat summary row, series DataFrame) of a finished case (interphase.analysis.summary)."""
-    from interphase.analysis.summary import summarise as analysis_summarise
-
+    # each summariser imported on its own path: a cell run never loads the shear-device analysis
     if case.cell:
         from interphase.analysis.cell_run import summarise_cell
 
         return summarise_cell(case, results)
+    from interphase.analysis.summary import summarise as analysis_summarise
 
     summary = analysis_summarise(case, results)
     return dict(summary.row), summary.series

@@ -169,12 +169,13 @@ class Liggghts(Engine):
         return ("history.txt",) if (Path(folder) / "cell.json").exists() else self.outputs
 
     def read_results(self, folder) -> Results:
-        from interphase.io.liggghts import read_folder
-
+        # each reader imported on its own path: a cell run never loads the dump reader (pyarrow.csv)
         if (Path(folder) / "cell.json").exists():
             from interphase.io.cell import read_cell_folder
 
             return read_cell_folder(folder)
+        from interphase.io.liggghts import read_folder
+
         return read_folder(folder)
 
 

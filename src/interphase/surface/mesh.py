@@ -8,13 +8,14 @@ up (+z, into the soil).
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 from interphase.surface.base import Profile
+
+# meshio is imported where an STL is written, not here: it costs ~0.1 CPU-s (it loads rich), which
+# every process importing the engines paid, cell runs (no surface) included
 
 
 def extruded_triangles(profile: Profile, y_min: float, y_max: float) -> tuple[np.ndarray, np.ndarray]:
@@ -46,12 +47,16 @@ def separable_triangles(along: Profile, across: Profile, y0: float) -> tuple[np.
 
 
 def stl_mesh(profile: Profile, y_min: float, y_max: float) -> meshio.Mesh:
+    import meshio
+
     points, tri = extruded_triangles(profile, y_min, y_max)
     return meshio.Mesh(points, [("triangle", tri)])
 
 
 def write_stl(profile: Profile, path: str | Path, y_min: float, y_max: float) -> Path:
     """ASCII STL (LIGGGHTS reads only ASCII) of the extruded profile."""
+    import meshio
+
     path = Path(path)
     meshio.write(path, stl_mesh(profile, y_min, y_max), file_format="stl", binary=False)
     return path
@@ -74,6 +79,10 @@ def segment_triangles(segments: np.ndarray, y_min: float, y_max: float) -> tuple
 
 def stl_text(points: np.ndarray, triangles: np.ndarray) -> str:
     """ASCII STL of a triangle set, as text (meshio's writer into memory)."""
+    import io
+
+    import meshio
+
     buf = io.StringIO()
     meshio.stl.write(buf, meshio.Mesh(points, [("triangle", triangles)]), binary=False)
     return buf.getvalue()
