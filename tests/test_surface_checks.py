@@ -129,6 +129,23 @@ def test_open_profile_scaling_x_z_d50_together(seed, scale):
     assert b.rnc == pytest.approx(a.rnc, abs=1e-9) and b.rn == pytest.approx(a.rn, abs=1e-9)
 
 
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(1, 400), w=st.integers(1, 400), seed=st.integers(0, 2**31), ties=st.booleans())
+def test_running_max_and_min_equal_scipys_filters(n, w, seed, ties):
+    """roughness.running (O(N) blocks, no scipy import in an engine run's summary) gives scipy.ndimage's
+    maximum/minimum_filter1d over every full window, exactly, with or without tied values."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    from interphase.surface.roughness import running
+
+    w = min(w, n)
+    z = np.random.default_rng(seed).normal(size=n)
+    z = z.round(0) if ties else z
+    full = slice(0, n - w + 1)
+    assert np.array_equal(running(z, w, np.maximum), maximum_filter1d(z, w, origin=-(w // 2))[full])
+    assert np.array_equal(running(z, w, np.minimum), minimum_filter1d(z, w, origin=-(w // 2))[full])
+
+
 def test_rn_ignores_a_linear_trend_on_open_profiles():
     p = random_profile(2, 1, 2, d50=D50, length=30 * D50, seed=3)
     tilted = Profile(p.x, p.z + 0.2 * p.x + 1e-3, periodic=False)
