@@ -1,9 +1,9 @@
 """Two density scales of one card against the laboratory, record by record: the misses in φ_peak and
 ψ_max of each `campaign element … --record … --report DIR` (its verification.csv), and their summed
-misfit Σ (miss_φ / 1.5°)² + (miss_ψ / 2°)², the issue's tolerances (docs/soils.md, "A scale that
-keeps the sand's void-ratio differences").
+misfit Σ (miss_φ / 1.5°)² + (miss_ψ / 2°)², the verdicts' tolerances (campaign.calibrate.TOLERANCES;
+docs/soils.md, "A scale that keeps the sand's void-ratio differences").
 
-    python bench/scale_misfit.py NAME=DIR[,DIR…] NAME=DIR[,DIR…]
+    PYTHONPATH=src python bench/scale_misfit.py NAME=DIR[,DIR…] NAME=DIR[,DIR…]
 
 Each NAME is one scale; its folders are read together (a record in two folders: the later one). Only
 records every scale has are compared. A measurement: exit 0 whatever it finds.
@@ -16,7 +16,9 @@ from pathlib import Path
 
 import pandas as pd
 
-TOL = {"phi": 1.5, "psi": 2.0}
+from interphase.campaign.calibrate import TOLERANCES
+
+TOL = {"phi": TOLERANCES["phi_peak_deg"], "psi": TOLERANCES["psi_max_deg"]}     # [°]
 
 
 def misses(folders: list[Path]) -> pd.DataFrame:

@@ -21,12 +21,12 @@ import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from interphase.errors import InputError
 from interphase.surface.base import Scan, check_axis
 from interphase.surface.lines import valid_runs
 from interphase.surface.normals import FILTERS, FLAT_TOLERANCE_DEG, keep_mask
+from interphase.surface.roughness import running
 
 MIN_RUN_D50 = 5.0
 #: sample shifts (samples × K) one axis may cost; sets the step of large scans (see areal_step)
@@ -117,10 +117,10 @@ def _window_rt(z: np.ndarray, run: np.ndarray, pos: np.ndarray, run_len: np.ndar
     """Sum of (max − min) over every window of w samples lying inside one run, and their count."""
     if z.size < w:
         return 0.0, 0
-    mx = maximum_filter1d(z, w, origin=-(w // 2))
-    mn = minimum_filter1d(z, w, origin=-(w // 2))
-    ok = pos + w - 1 <= run_len[run] - 1
-    return float(np.sum((mx - mn)[ok])), int(np.count_nonzero(ok))
+    # windows starting at i = 0 … z.size − w; a window inside its run starts no later than that
+    ok = (pos + w - 1 <= run_len[run] - 1)[: z.size - w + 1]
+    rt = running(z, w, np.maximum) - running(z, w, np.minimum)
+    return float(np.sum(rt[ok])), int(np.count_nonzero(ok))
 
 
 def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, where: str) -> _Axis:
