@@ -36,7 +36,8 @@ def pytest_runtest_protocol(item, nextitem):
     yield
     OUT.mkdir(parents=True, exist_ok=True)
     with open(OUT / f"cpu-{os.getpid()}.jsonl", "a") as f:
-        f.write(json.dumps({"id": item.nodeid, "cpu": _cpu() - cpu, "wall": time.time() - wall}) + "\n")
+        f.write(json.dumps({"id": item.nodeid, "cpu": _cpu() - cpu, "wall": time.time() - wall, "start": wall,
+                            "worker": os.environ.get("PYTEST_XDIST_WORKER", "master")}) + "\n")
 
 
 def main(out: Path = OUT, top: int = 25) -> None:
@@ -48,6 +49,13 @@ def main(out: Path = OUT, top: int = 25) -> None:
     by_file = runs.groupby("file").cpu.agg(["sum", "count"]).sort_values("sum", ascending=False)
     print(by_file.head(top).round(0).to_string(), "\n")
     print(runs.nlargest(top, "cpu")[["cpu", "wall", "id"]].round(0).to_string(index=False))
+    if "start" in runs:
+        # each worker's span from the first test's start to the last one's end, and the time it was in a test
+        t0 = runs["start"].min()
+        w = runs.assign(end=runs["start"] + runs["wall"]).groupby("worker").agg(
+            first=("start", "min"), last=("end", "max"), in_tests=("wall", "sum"), cpu=("cpu", "sum"))
+        w[["first", "last"]] -= t0
+        print("\nper worker [s] (from the first test's start):\n" + w.round(0).to_string())
 
 
 if __name__ == "__main__":

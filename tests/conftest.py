@@ -70,7 +70,7 @@ def pytest_collection_finish(session):
 def xdist_group(item) -> str | None:
     """The worker group of a test under `pytest -n N --dist loadgroup` (make test): tests that share
     an expensive fixture wider than one test run on one worker, so that it is built once, not once per
-    worker. quick_campaign (a real campaign, shared by nine files) is one group; the SLURM tests are
+    worker (quick_campaign is shared across workers by a lock instead: its nine reading files spread); the SLURM tests are
     one group (each module brings up its own daemons: one cluster at a time, no two racing for free
     ports); a test using a module- or session-scoped fixture of tests/ runs with its module. Every
     other test goes to whichever worker is free."""
@@ -79,8 +79,6 @@ def xdist_group(item) -> str | None:
     info = getattr(item, "_fixtureinfo", None)
     if info is None:
         return None
-    if "quick_campaign" in info.names_closure:
-        return "quick_campaign"
     for defs in info.name2fixturedefs.values():
         d = defs[-1]
         if d.scope != "function" and getattr(d.func, "__module__", "").startswith("tests"):
@@ -97,7 +95,7 @@ def need_binary(name: str) -> str:
 
 
 @pytest.fixture(scope="session")
-def quick_campaign(tmp_path_factory) -> Path:
+def quick_campaign(tmp_path_factory, request) -> Path:
     """campaigns/quick.toml with a smaller sweep (Rt/D50 0.5 and 1 at μs 0.2, seeds 1 and 2: 4
     interface cases and their 2 box tests) and 1 mm of shear, not its 3 mm (the shear is most of a
     case's engine time), run for real with LIGGGHTS into a temporary output folder; returns the path
@@ -107,11 +105,30 @@ def quick_campaign(tmp_path_factory) -> Path:
     (one seed's peak is at the end, tan φ 0.22) and E reads 1.5-1.8. No test reads the physics; what
     they read holds with margin: 5 contact snapshots a run (animation test: more than 3), 209 grains
     and 19 surface contacts in the network figure's peak snapshot (more than 50, at least 1), the
-    restored campaign's ensembles within 0.17 % of the original's (test_restore: 1 %)."""
+    restored campaign's ensembles within 0.17 % of the original's (test_restore: 1 %).
+    Under pytest-xdist the first worker to ask runs it in the session's shared temporary folder and
+    the others wait on its lock and read the same runs (every reader only reads or copies them, as
+    `campaign status` reads a running campaign), so its reading tests spread over the workers."""
+    from filelock import FileLock
+
     from interphase.cli import main
 
     need_binary("liggghts")
-    tmp = tmp_path_factory.mktemp("quick")
+    base = tmp_path_factory.getbasetemp()
+    under_xdist = hasattr(request.config, "workerinput")       # each worker's basetemp is one folder down
+    tmp = (base.parent if under_xdist else base) / "quick-campaign"
+    toml = tmp / "quick.toml"
+    built = tmp / "BUILT"                   # written last: a worker that died mid-run leaves none
+    with FileLock(str(tmp) + ".lock"):
+        if not built.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+            tmp.mkdir()
+            _run_quick_campaign(tmp, toml, main)
+            built.touch()
+    return toml
+
+
+def _run_quick_campaign(tmp: Path, toml: Path, main) -> None:
     text = (ROOT / "campaigns" / "quick.toml").read_text()
     toml = tmp / "quick.toml"
     text = text.split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5, 1]\nfriction_ps = [0.2]\nseed = [1, 2]\n"
@@ -120,4 +137,3 @@ def quick_campaign(tmp_path_factory) -> Path:
     text = "\n".join(line for line in text.splitlines() if not line.startswith("output ="))
     toml.write_text(text.replace('name = "quick"', f'name = "quick"\noutput = "{tmp / "runs"}"', 1))
     assert main(["run", str(toml)]) == 0
-    return toml
