@@ -5,14 +5,19 @@ rejects (a valid Case whose shear modulus is below LIGGGHTS's floor for hard par
 fails at run time, honestly); one with far too much shear for its tiny box (it used to lose grains; now
 the grains that leave under the side wall are removed and the case finishes); one case far longer than
 its 1-minute time limit, which SLURM kills. Each failure must be reported with its own cause; the
-others finished.
+others finished. The long case's engine is stopped (SIGSTOP) once it runs: hung past its limit, it
+fails the same way without holding a core for the minute the limit takes (the other tests run on
+the same 2 cores meanwhile).
 """
 
 from __future__ import annotations
 
 import json
+import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -24,6 +29,7 @@ from slurm_cluster import SlurmCluster  # noqa: E402
 
 pytestmark = [pytest.mark.slurm, pytest.mark.liggghts]
 
+LONG_VELOCITY = 0.00005
 TABLES = dict(
     campaign={"name": "slurm-test", "engines": ["liggghts"], "output": "out"},
     # time_limit [min]: the long case cannot make it
@@ -38,7 +44,31 @@ TABLES = dict(
            # against 27 s at 80×: far inside the 1-minute limit even on a loaded machine)
            {"name": "long_shear", "case": {"shear_distance": 0.01}},
            # 1000× slower shear: minutes of engine time, far beyond the 1-minute limit
-           {"name": "long", "case": {"shear_velocity": 0.00005}}])
+           {"name": "long", "case": {"shear_velocity": LONG_VELOCITY}}])
+
+
+def _hang_engine_of(out: Path, proc: subprocess.Popen, velocity: float, timeout: float = 180) -> bool:
+    """SIGSTOP the LIGGGHTS process of the case in `out` sheared at `velocity`, once it runs (its
+    working directory is the case folder, runner.stale_engine_pids); False if it never ran."""
+    from interphase.campaign.runner import stale_engine_pids
+
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline:
+        for meta in out.glob("*/case.json"):
+            try:
+                if json.loads(meta.read_text())["inputs"]["shear_velocity"] != velocity:
+                    continue
+            except (OSError, ValueError, KeyError):
+                continue
+            for pid in stale_engine_pids(meta.parent):
+                try:
+                    if Path(f"/proc/{pid}/comm").read_text().strip() == "liggghts":
+                        os.kill(pid, signal.SIGSTOP)
+                        return True
+                except OSError:
+                    continue
+        time.sleep(0.5)
+    return False
 
 
 @pytest.fixture(scope="module")
@@ -53,9 +83,15 @@ def slurm(tmp_path_factory):
 def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
     camp = write_toml(tmp_path / "slurm.toml", **TABLES)
     env = slurm.env()
-    run = subprocess.run([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
-                         env=env, capture_output=True, text=True, timeout=300)
-    assert run.returncode == 1, run.stdout + run.stderr     # some cases did not finish
+    log = tmp_path / "run.log"
+    with open(log, "w") as sink:        # a file, not a pipe: nobody reads while the engine is found
+        proc = subprocess.Popen([sys.executable, "-m", "interphase.cli", "run", str(camp), "--plain"], cwd=tmp_path,
+                                env=env, stdout=sink, stderr=subprocess.STDOUT, text=True)
+        hung = _hang_engine_of(tmp_path / "out", proc, LONG_VELOCITY)
+        proc.wait(timeout=300)
+    stdout = log.read_text()
+    assert hung, "the long case's engine never ran: " + stdout
+    assert proc.returncode == 1, stdout     # some cases did not finish
     status = subprocess.run([sys.executable, "-m", "interphase.cli", "status", str(camp), "--json"], cwd=tmp_path,
                             env=env, capture_output=True, text=True, timeout=60)
     assert status.returncode == 0, status.stderr
@@ -65,7 +101,7 @@ def test_slurm_campaign_reports_engine_failure_and_timeout(slurm, tmp_path):
     out = tmp_path / "out"
 
     # the ordinary cases finished, through SLURM (job id recorded in case.json)
-    assert [c["status"] for c in cases["ok"]] == ["done", "done"], run.stdout
+    assert [c["status"] for c in cases["ok"]] == ["done", "done"], stdout
     for c in cases["ok"]:
         folder = out / c["case_id"]
         assert (folder / "DONE").exists() and (folder / "history.parquet").exists()
