@@ -428,12 +428,14 @@ def test_a_tiny_calibration_against_a_record_writes_a_card_with_its_density_and_
     assert {c["quantity"] for c in out["achieved"]} == {"phi_peak_deg", "psi_max_deg", "phi_cs_deg", "relative_density"}
     lab = {c["quantity"]: c["laboratory"] for c in out["achieved"]}
     assert lab["phi_peak_deg"] == pytest.approx(40.39, abs=0.01)      # TMD17, read from the record itself
-    # the record's Dr is not fitted: it sets the card's density scale, which maps it back onto the
-    # fitted state (the achieved run is at the record's Dr on that scale)
-    assert card.lab_span == pytest.approx(out["density"]["model_relative_density"] / 0.7847, rel=1e-3)
+    # the record's Dr is not fitted: it sets the card's density scale, which keeps the sand's steps in
+    # void ratio (span = its index span 0.377 over the model's) and maps the record back onto the fitted
+    # state (the achieved run is at the record's Dr on that scale)
+    assert card.lab_span == pytest.approx(0.377 / (e_max - e_min), rel=1e-4)
+    assert card.lab_offset + card.lab_span * 0.7847 == pytest.approx(out["density"]["model_relative_density"], abs=1e-3)
     dr = next(c for c in out["achieved"] if c["quantity"] == "relative_density")
     assert dr["measured"] == pytest.approx(0.7847, abs=0.05)
-    # ... exactly: the map that read the record's Dr holds the fitted point _lab_span measured
+    # ... exactly: the map that read the record's Dr holds the fitted point _lab_scale measured
     assert out["achieved_preparation"] == pytest.approx(card.soil["preparation"], abs=2e-4)
     before = Path(out["card"]).read_bytes()
     again = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
@@ -487,7 +489,7 @@ def test_the_cell_study_table_keeps_the_fields_it_groups_by():
 
 
 def test_a_cards_checks_print_as_one_row_per_record_the_fitted_one_first():
-    """bench/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, five records held out."""
+    """bench/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, the other 14 records held out."""
     import importlib.util
     import tomllib
 

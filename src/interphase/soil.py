@@ -78,17 +78,20 @@ class SoilCard:
 
     @property
     def lab_span(self) -> float:
-        """The share of the model's span of void ratios (frictionless preparation to the grains' own
-        friction, on the limits `dr_limits` names) that the laboratory's e_max − e_min stands for
-        ([density] lab_span, set by a calibration against records: the model's Dr at the fitted state over the
-        record's); a laboratory Dr maps onto e = e_max − Dr · lab_span · (e_max − e_min). 1 when the
-        card has none: the model's own limits are the laboratory's."""
+        """The slope of the density scale, model Dr = lab_offset + lab_span · laboratory Dr, on the model's
+        span of void ratios (frictionless preparation to the grains' own friction, on the limits
+        `dr_limits` names): [density] lab_span, set by a calibration against records
+        (calibrate_cell._lab_scale). On index limits the sand's e_max − e_min over the model's, so a step
+        in the laboratory's e0 is the same step in the model's; on the test's limits the model's Dr at
+        the fitted state over the record's. 1 when the card has none: the model's own limits are the
+        laboratory's (docs/soils.md, "The density scale")."""
         return float(self.extra.get("density", {}).get("lab_span", 1.0))
 
     @property
     def lab_offset(self) -> float:
-        """The model's Dr [-] that a laboratory Dr of 0 maps onto ([density] lab_offset, fitted beside
-        lab_span on several records of one stress: bench/density_scale.py): the model's Dr =
+        """The model's Dr [-] that a laboratory Dr of 0 maps onto ([density] lab_offset: set with lab_span
+        by a calibration on index limits so that the fitted record's Dr lands on the fitted state, or
+        fitted through several records of one stress by bench/density_scale.py): the model's Dr =
         lab_offset + lab_span · Dr. 0 when the card has none (the one-parameter scale: the model's
         loosest packing is the laboratory's e_max). Negative when the laboratory's loose end lies
         beyond what the protocol packs; a Dr mapped there is made at the loosest packing (preparation 1)

@@ -27,7 +27,7 @@ loosest packing at the sample's own friction: one token consolidation per sample
 record's stress. Likelihood spreads ∝ TOLERANCES.
 
 After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains,
-with lab_span: the model's Dr at the fitted state over the record's, `_lab_span`), then the
+with the density scale lab_span, lab_offset that maps the record's Dr onto the fitted state, `_lab_scale`), then the
 laboratory's test on it at the fitted record and at every held-out one, each at that record's σ3′
 and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
 """
@@ -87,9 +87,15 @@ class CellTarget:
     @property
     def values(self) -> dict:
         """What the fit matches: the record's angles. Its Dr is not matched: the spheres dilate more
-        than the sand at the same Dr on their own limits (docs/soils.md, "Density follows dilatancy"),
+        than the sand at the same Dr on their own limits (docs/soils.md, "The density scale"),
         so the model's Dr is measured at the fitted state and fixes the card's density scale."""
         return dict(self.record.values)
+
+    @property
+    def index_limits(self) -> tuple[float, float]:
+        """The sand's (e_min, e_max) from its index tests ([target] e_min, e_max)."""
+        t = self.raw["target"]
+        return float(t["e_min"]), float(t["e_max"])
 
 
 def is_cell_target(path) -> bool:
@@ -240,17 +246,27 @@ def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
                       "difference": r.relative_density - dr_lab, "tolerance": TOLERANCES["relative_density"]}]
 
 
-def _lab_span(card: SoilCard, rec: Record, seeds, output: Path, executor, jobs, stream, rerun_failed):
-    """(lab_span, the model's own Dr (on the limits the card reads a Dr on: density.read_limits) of the
-    fitted state at the record's stress): lab_span = that Dr over the record's, so the laboratory's Dr
-    maps back onto the fitted state and every other Dr onto the same share of the model's span
-    (SoilCard.lab_span)."""
+def _lab_scale(card: SoilCard, target: CellTarget, seeds, output: Path, executor, jobs, stream, rerun_failed):
+    """(lab_span, lab_offset, the model's own Dr of the fitted state at the record's stress, on the limits
+    the card reads a Dr on: density.read_limits): the scale model Dr = lab_offset + lab_span · Dr that maps
+    the record's Dr back onto the fitted state (SoilCard.lab_span, lab_offset).
+
+    On index limits a laboratory step in Dr keeps its step in void ratio: lab_span = the sand's
+    e_max − e_min over the model's, the offset puts the record on the fitted state (the void-ratio
+    scale, docs/soils.md: per unit of e0 the spheres gain φ_peak and ψ_max as the sand does). On the
+    test's own limits the scale is the ratio model Dr / record Dr (offset 0)."""
     from interphase.campaign.density import own_relative_density
 
+    rec = target.record
     model_dr = own_relative_density(card, nominal(rec.confining_stress), seeds, card.soil["preparation"],
                                     output=output, executor=executor, jobs=jobs, stream=stream,
                                     rerun_failed=rerun_failed)
-    return round(model_dr / rec.relative_density, 4), round(model_dr, 4)
+    if card.dr_limits == "index":
+        e_min, e_max = card.void_ratio_limits
+        lab_min, lab_max = target.index_limits
+        span = (lab_max - lab_min) / (e_max - e_min)
+        return round(span, 6), round(model_dr - span * rec.relative_density, 6), round(model_dr, 4)
+    return round(model_dr / rec.relative_density, 4), 0.0, round(model_dr, 4)
 
 
 def nominal(stress: float) -> float:
@@ -316,9 +332,9 @@ def _calibrate(target, budget, runs, card_at, name, quick, executor, jobs, strea
     density = {"reference_stress": REFERENCE_STRESS, "seeds": len(seeds), "n_grains": int(target.cell["n_grains"]),
                "preparations": list(prep), "void_ratios": [round(float(v), 5) for v in e],
                "e_min": round(e_min, 5), "e_max": round(e_max, 5)}
-    card.extra["density"] = density         # the index limits _lab_span reads the fitted state on
-    density["lab_span"], density["model_relative_density"] = _lab_span(
-        card, target.record, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
+    card.extra["density"] = density         # the index limits _lab_scale reads the fitted state on
+    density["lab_span"], density["lab_offset"], density["model_relative_density"] = _lab_scale(
+        card, target, seeds, runs / f"final{tag}" / "density", executor, jobs, stream, rerun_failed)
     achieved, achieved_prep, verification, n_final = _final(card, target, list(range(1, int(budget["final_seeds"]) + 1)),
                                              runs / f"final{tag}", executor, jobs, stream, rerun_failed)
     import pandas as pd

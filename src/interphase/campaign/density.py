@@ -172,7 +172,7 @@ def lab_limits(e_min: float, e_max: float, span: float, offset: float = 0.0) -> 
     """(e_min, e_max) that a laboratory Dr is read on, from the model's own (its densest and loosest
     packings): a laboratory Dr stands for the model's Dr = offset + span · Dr (SoilCard.lab_span and
     lab_offset: the spheres dilate more than the sand at the same Dr on their own limits, docs/soils.md
-    "Density follows dilatancy"), so Dr 1 is e_max − (offset + span)(e_max − e_min) and Dr 0 is
+    "The density scale"), so Dr 1 is e_max − (offset + span)(e_max − e_min) and Dr 0 is
     e_max − offset (e_max − e_min). With offset 0 the model's loosest packing is the laboratory's."""
     d = e_max - e_min
     return e_max - (offset + span) * d, e_max - offset * d

@@ -1,14 +1,13 @@
 """A card's density scale fitted on several records of one stress: where each record sits on the
 card's preparations, and the straight line from the laboratory's Dr to the model's
-(docs/soils.md, "A scale with an offset").
+(docs/soils.md, "The density scale").
 
-The one-parameter scale (SoilCard.lab_span, set by a calibration on one record) ties a laboratory
-Dr of 0 to the model's loosest packing. With records at several densities of one stress, each
-record's preparation is found on a sweep of the card's preparations at that stress
-(`anchor_preparation`), read as the model's Dr on the card's void-ratio map there (`model_dr`), and
-the line `model Dr = lab_offset + lab_span · Dr` fitted through them (`fit_scale`); whether the
-offset is needed is read from its interval (bench/density_scale.py bootstraps the seeds). The
-records of the other stresses stay held out.
+A calibration on one record sets the scale from that record alone (calibrate_cell._lab_scale). With
+records at several densities of one stress, each record's preparation is found on a sweep of the
+card's preparations at that stress (`anchor_preparation`), read as the model's Dr on the card's
+void-ratio map there (`model_dr`), and the line `model Dr = lab_offset + lab_span · Dr` fitted
+through them (`fit_scale`); whether the offset is needed is read from its interval
+(bench/density_scale.py bootstraps the seeds). The records of the other stresses stay held out.
 """
 
 from __future__ import annotations
