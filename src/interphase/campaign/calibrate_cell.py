@@ -27,9 +27,10 @@ loosest packing at the sample's own friction: one token consolidation per sample
 record's stress. Likelihood spreads ∝ TOLERANCES.
 
 After sampling: the card ([soil] = posterior mean, [cell], [density] measured for the chosen grains,
-with the density scale lab_span, lab_offset that maps the record's Dr onto the fitted state, `_lab_scale`), then the
-laboratory's test on it at the fitted record and at every held-out one, each at that record's σ3′
-and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside / undecided, as calibrate.py).
+with the density scale lab_span, lab_offset that maps the record's Dr onto the fitted state,
+`_lab_scale`), then the laboratory's test on it at the fitted record and at every held-out one, each
+at that record's σ3′ and Dr0 (`campaign.cell.run_cell`), with verdicts (within / outside /
+undecided, as calibrate.py).
 """
 
 from __future__ import annotations
