@@ -56,8 +56,9 @@ def angles_figure(rows, path: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(1, 2, figsize=(8, 3.4))
     dens = sorted({round(r["relative_density"], 1) for r in rows})
+    lines = -(-2 * len(dens) // 4)                # the legend's rows, four entries a row
+    fig, ax = plt.subplots(1, 2, figsize=(8, 3.4 + 0.15 * lines))
     for k, (q, lab) in enumerate((("phi_peak_deg", "lab_phi"), ("psi_max_deg", "lab_psi"))):
         for i, d in enumerate(dens):
             sel = [r for r in rows if round(r["relative_density"], 1) == d]
@@ -74,8 +75,10 @@ def angles_figure(rows, path: Path) -> list[Path]:
         ax[k].minorticks_off()
         ax[k].set_xlabel("σ3′ [kPa]")
         ax[k].set_ylabel("φ_peak [°]" if k == 0 else "ψ_max [°]")
-    ax[0].legend(fontsize=7, frameon=False)
-    fig.tight_layout()
+    # below the panels: on a card's full programme (four densities, five stresses) no corner is free
+    handles, labels = ax[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(4, len(dens)), fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.02 + 0.05 * lines, 1, 1))
     return _save(fig, path)
 
 
