@@ -132,6 +132,33 @@ def test_a_density_scale_with_an_offset_moves_both_ends_and_a_bad_offset_is_refu
         load_card(path)
 
 
+def test_a_calibration_keeps_the_sands_void_ratio_steps_on_index_limits_and_the_ratio_on_the_tests(tmp_path, monkeypatch):
+    """calibrate_cell._lab_scale: on index limits a step in the record's e0 is the same step in the
+    model's (lab_span = the sand's index span over the model's) and the record lands on the fitted state;
+    on the test's limits the ratio, offset 0. The model's Dr at the fitted state (an engine measurement,
+    made for real by the tiny calibration below) is given here."""
+    from interphase.campaign import calibrate_cell, density
+    from interphase.soil import load_card
+
+    monkeypatch.setattr(density, "own_relative_density", lambda *a, **k: 0.51)
+    record = calibrate_cell.Record(KFS / "TMD17.dat", 99.6e3, 0.7582, (1.054 - 0.7582) / 0.377, {})
+    target = calibrate_cell.CellTarget(path=tmp_path / "t.toml", name="t", test="triaxial", record=record, source="",
+                                       soil={}, free={}, cell={}, budget={},
+                                       raw={"target": {"e_min": 0.677, "e_max": 1.054}})
+    path = tmp_path / "s.toml"
+    base = CARD.format(name="s", test="triaxial", n=200, strain=0.03) + "\n[density]\ne_min = 0.533\ne_max = 0.828\n"
+    path.write_text(base)
+    span, offset, model_dr = calibrate_cell._lab_scale(load_card(path), target, [1], tmp_path, None, 1, None, False)
+    assert span == pytest.approx(0.377 / 0.295, rel=1e-5) and model_dr == 0.51
+    assert offset + span * record.relative_density == pytest.approx(0.51, abs=1e-5)
+    e = lambda dr: 0.828 - (offset + span * dr) * 0.295            # the model's e0 of a laboratory Dr
+    e_lab = lambda dr: 1.054 - dr * 0.377
+    assert e(0.63) - e(0.92) == pytest.approx(e_lab(0.63) - e_lab(0.92))
+    path.write_text(base + 'dr_limits = "test"\n')
+    span, offset, _ = calibrate_cell._lab_scale(load_card(path), target, [1], tmp_path, None, 1, None, False)
+    assert offset == 0.0 and span == pytest.approx(0.51 / record.relative_density, abs=1e-4)
+
+
 def test_a_card_names_the_limits_a_relative_density_is_read_on_and_a_bad_name_is_refused(tmp_path):
     from interphase.soil import load_card
 
