@@ -70,10 +70,10 @@ def pytest_collection_finish(session):
 def xdist_group(item) -> str | None:
     """The worker group of a test under `pytest -n N --dist loadgroup` (make test): tests that share
     an expensive fixture wider than one test run on one worker, so that it is built once, not once per
-    worker (quick_campaign is shared across workers by a lock instead: its nine reading files spread); the SLURM tests are
-    one group (each module brings up its own daemons: one cluster at a time, no two racing for free
-    ports); a test using a module- or session-scoped fixture of tests/ runs with its module. Every
-    other test goes to whichever worker is free."""
+    worker. The SLURM tests are one group (each module brings up its own daemons: one cluster at a
+    time, no two racing for free ports); a test using a module- or session-scoped fixture of tests/
+    runs with its module. Every other test goes to whichever worker is free: quick_campaign, shared by
+    nine files, is built once for all workers behind a lock instead (its fixture)."""
     if item.get_closest_marker("slurm") is not None:
         return "slurm"
     info = getattr(item, "_fixtureinfo", None)
@@ -111,8 +111,6 @@ def quick_campaign(tmp_path_factory, request) -> Path:
     `campaign status` reads a running campaign), so its reading tests spread over the workers."""
     from filelock import FileLock
 
-    from interphase.cli import main
-
     need_binary("liggghts")
     base = tmp_path_factory.getbasetemp()
     under_xdist = hasattr(request.config, "workerinput")       # each worker's basetemp is one folder down
@@ -123,14 +121,16 @@ def quick_campaign(tmp_path_factory, request) -> Path:
         if not built.exists():
             shutil.rmtree(tmp, ignore_errors=True)
             tmp.mkdir()
-            _run_quick_campaign(tmp, toml, main)
+            _run_quick_campaign(tmp, toml)
             built.touch()
     return toml
 
 
-def _run_quick_campaign(tmp: Path, toml: Path, main) -> None:
+def _run_quick_campaign(tmp: Path, toml: Path) -> None:
+    """The reduced quick campaign written to `toml`, its runs to `tmp`/runs, run for real."""
+    from interphase.cli import main
+
     text = (ROOT / "campaigns" / "quick.toml").read_text()
-    toml = tmp / "quick.toml"
     text = text.split("[sweep]")[0] + "[sweep]\nprofile.rt = [0.5, 1]\nfriction_ps = [0.2]\nseed = [1, 2]\n"
     assert "\nshear_distance = 0.003\n" in text
     text = text.replace("\nshear_distance = 0.003\n", "\nshear_distance = 0.001\n", 1)
