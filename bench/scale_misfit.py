@@ -21,8 +21,14 @@ from interphase.campaign.calibrate import TOLERANCES
 TOL = {"phi": TOLERANCES["phi_peak_deg"], "psi": TOLERANCES["psi_max_deg"]}     # [°]
 
 
+def read_reports(folders) -> pd.DataFrame:
+    """The rows of several reports' verification.csv together, one per record (a record in two: the
+    later folder's)."""
+    return pd.concat([pd.read_csv(Path(f) / "verification.csv") for f in folders]).drop_duplicates("record", keep="last")
+
+
 def misses(folders: list[Path]) -> pd.DataFrame:
-    v = pd.concat([pd.read_csv(f / "verification.csv") for f in folders]).drop_duplicates("record", keep="last")
+    v = read_reports(folders)
     return pd.DataFrame({"record": v.record, "stress_kPa": v.confining_stress / 1e3, "dr_lab": v.relative_density,
                          "e0": v.void_ratio, "phi": v.phi_peak_deg - v.lab_phi, "psi": v.psi_max_deg - v.lab_psi,
                          "n": v.n_seeds}).set_index("record")
