@@ -2,14 +2,16 @@
 folder, no engine): the seed ensembles, the correlations with their seed bootstrap, criterion.json,
 the criterion's check against every case, and the findings tables.
 
-    PYTHONPATH=src python bench/refit_reproduction.py [--study] [--sandlike] [--out DIR] [--boot N]
-        [--figures] [--commit]
+    PYTHONPATH=src python bench/refit_reproduction.py [--study] [--sandlike] [--kfs2d] [--kfs3d]
+        [--out DIR] [--boot N] [--figures] [--commit]
 
---study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/.
+--study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/;
+--kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/group1/.
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
 repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
-(and, with --figures, its figures to docs/reproduction/figures/); the sand-like soil's
-correlations.csv, criterion.json, ensembles.csv and Figs. 6.8, 6.10a to docs/reproduction/group1_sandlike/.
+(and, with --figures, its figures to docs/reproduction/figures/); any other set's
+correlations.csv, criterion.json, criterion_check.md (and, with --figures, the figures its folder
+already holds) to its folder.
 Bootstrap refits per correlation: 99 (the shipped criterion's count) unless --boot.
 """
 
@@ -31,7 +33,9 @@ from interphase.report.build import analyse, write  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 REPRO = ROOT / "docs" / "reproduction"
 SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
-        "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml")}
+        "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
+        "kfs2d": (REPRO / "real_sand" / "2d", ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"),
+        "kfs3d": (REPRO / "real_sand" / "3d" / "group1", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
 
 
 class CommittedRuns(_Curves):
@@ -68,7 +72,8 @@ def commit(name: str, report: Path, figures: bool) -> None:
         return
     dest = SETS[name][0]
     shutil.copy(report / "criterion.json", dest / "criterion.json")
-    shutil.copy(report / "tables" / "correlations.csv", dest / "correlations.csv")
+    for table in ("correlations.csv", "criterion_check.md"):
+        shutil.copy(report / "tables" / table, dest / table)
     if figures:
         for png in dest.glob("*.png"):
             shutil.copy(report / "figures" / png.name, png)
@@ -78,6 +83,8 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--study", action="store_true")
     ap.add_argument("--sandlike", action="store_true")
+    ap.add_argument("--kfs2d", action="store_true")
+    ap.add_argument("--kfs3d", action="store_true")
     ap.add_argument("--out", default="/tmp/refit")
     ap.add_argument("--boot", type=int, default=99)
     ap.add_argument("--figures", action="store_true")

@@ -76,7 +76,8 @@ def lattice_packing_3d(case: Case, x_min: float, x_max: float, z_floor: float) -
     if per_x < 2 or per_y < 2:
         raise InputError(f"the 3D cell ({x_max - x_min:.4g} × {depth:.4g} m) holds fewer than two grains in x or y",
                          where="case.box_depth_d50" if per_y < 2 else "case.box_length_d50",
-                         fix="make the cell at least 3 D50 long and 3 D50 deep")
+                         fix=f"make the cell at least {math.ceil(25 * pitch / case.d50) / 10:g} D50 long and deep: "
+                             f"2.5 lattice pitches of the largest grain ({case.gradation.d_max / case.d50:.2f} D50)")
     k = np.arange(n)
     layer, rest = k // (per_x * per_y), k % (per_x * per_y)
     row, col = rest // per_x, rest % per_x

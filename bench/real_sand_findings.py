@@ -1,0 +1,142 @@
+"""Issue 38's findings on the Karlsruhe fine sand, from the committed tables (no runs, no engine).
+
+    PYTHONPATH=src python bench/real_sand_findings.py
+
+Reads docs/reproduction/real_sand/2d/ (campaigns/real_sand/group1_kfs_2d.toml, the quasi-2D card) and
+docs/reproduction/real_sand/3d/group1/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
+D50 cell): summaries.csv and curves.parquet, read as the report reads runs (analysis.ensemble_table:
+each case's leave-one-out peak over its seeds, E over the paired soil test, 95 % intervals).
+Prints Markdown for docs/reproduction.md:
+  1. per cell: E (95 %) per Rt/D50 × μs, with θa, the teeth's face angle and θr; the soil's tan φ;
+  2. where E saturates, per friction: the highest tooth whose E is decided below 1 (interval under 1)
+     and the lowest from which every interval reaches 1, against Dove & Jarrett's laboratory
+     thresholds (Rt/D50 > 0.9, face angle ≥ 50°);
+  3. E on the teeth at Rt/D50 ≥ 1: range, mean, and how many intervals lie above 1, contain it, lie
+     under it (is the interface at full mobilisation stronger than the soil's own test?);
+  4. 3D − quasi-2D per physical case (Rt/D50, μs): E's difference with its interval and verdict at
+     ± 0.05 (three_d_comparison.e_difference: two soils, two interface ensembles), tan δ's at ± 0.03.
+The break of E–θr and the criterion's skill are the report's (`bench/refit_reproduction.py --kfs2d
+--kfs3d`: correlations.csv, criterion_check.md). A measurement: exit 0 whatever it finds.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).parent))
+from three_d_comparison import TOL_E, TOL_TAN, _Curves, e_difference  # noqa: E402
+
+from interphase.analysis.difference import difference  # noqa: E402
+from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
+from interphase.campaign.compare import seed_values  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+CELLS = {"quasi-2D": ROOT / "docs" / "reproduction" / "real_sand" / "2d",
+         "3D": ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "group1"}
+SATURATED_RT = 1.0        # the teeth whose E item 3 of the issue reads as the plateau
+
+
+def load(folder: Path) -> dict:
+    """The cell's ensembles (one row per physical interface case, with rt and μs), per-seed peaks
+    (interface by case, soil tests pooled) and the soil's tan φ."""
+    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "pair_id": str})
+    store = _Curves(folder / "curves.parquet")
+    table = ensemble_table(summ, store)
+    seeds = seed_values(summ, store)
+    iface = summ[summ["test"] == "interface"].copy()
+    iface["case"] = iface["label"].str.replace(r"-s\d+$", "", regex=True)
+    keys = iface.groupby("case")[["rt", "friction_ps", "sw"]].first()
+    cases = table[table["case"].isin(keys.index)].set_index("case").join(keys)
+    cases["face_deg"] = np.degrees(np.arctan2(cases["rt"].astype(float), cases["sw"].astype(float) / 2))
+    box = seeds[seeds["test"] == "box"]["peak"].to_numpy(float)
+    return {"cases": cases.reset_index(), "seeds": seeds, "soil": box,
+            "tan_phi": table["tan_phi"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan,
+            "tan_phi_lo": table["tan_phi_lo"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan,
+            "tan_phi_hi": table["tan_phi_hi"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan}
+
+
+def _e(r) -> str:
+    return f"{r.E:.2f} ({r.E_lo:.2f}–{r.E_hi:.2f})" if np.isfinite(r.E) else "—"
+
+
+def e_table(name: str, d: dict) -> None:
+    c = d["cases"]
+    phi = math.degrees(math.atan(d["tan_phi"]))
+    print(f"\n**{name}**: soil test tan φ {d['tan_phi']:.3f} ({d['tan_phi_lo']:.3f}–{d['tan_phi_hi']:.3f}), "
+          f"φ {phi:.1f}°, {d['soil'].size} seeds")
+    rts = sorted(c["rt"].astype(float).unique())
+    print("\n| Rt/D50 | " + " | ".join(f"{r:g}" for r in rts) + " |")
+    print("|---|" + "---|" * len(rts))
+    by = c.set_index(["friction_ps", "rt"])
+    first = c.groupby("rt").first()
+    print("| θa (> 92°), face angle | " + " | ".join(
+        f"{first.loc[r, 'theta_a_deg_92']:.1f}°, {first.loc[r, 'face_deg']:.1f}°" for r in rts) + " |")
+    for mu in sorted(c["friction_ps"].unique()):
+        row = [by.loc[(mu, r)] if (mu, r) in by.index else None for r in rts]
+        print(f"| μs {mu:g}: E | " + " | ".join(_e(x) if x is not None else "—" for x in row) + " |")
+        print(f"| μs {mu:g}: θr, seeds | " + " | ".join(
+            f"{x.theta_r_deg:.1f}°, {int(x.seeds)}" if x is not None else "—" for x in row) + " |")
+    half = (c["E_hi"] - c["E_lo"]) / 2
+    print(f"\n{len(c)} physical cases; E's 95 % half-width ≤ 0.1 on {int((half <= 0.1).sum())} "
+          f"({(half <= 0.1).mean():.0%}); seeds {int(c['seeds'].min())}–{int(c['seeds'].max())}")
+
+
+def saturation(name: str, d: dict) -> None:
+    c = d["cases"]
+    print(f"\n{name}, where E saturates (interval reaching 1):")
+    for mu, g in c.sort_values("rt").groupby("friction_ps"):
+        below = g[g["E_hi"] < 1.0]
+        last_below = below["rt"].max() if len(below) else None
+        reach = g[g["rt"] > (last_below if last_below is not None else -1)]
+        from_rt = reach["rt"].min() if len(reach) else None
+        face = reach["face_deg"].min() if len(reach) else math.nan
+        lb = f"Rt/D50 {last_below:g} decided below 1 (E {_e(below.iloc[-1])})" if last_below is not None else "none decided below 1"
+        print(f"- μs {mu:g}: {lb}; every interval reaches 1 from Rt/D50 {from_rt:g} (face {face:.1f}°)"
+              if from_rt is not None else f"- μs {mu:g}: {lb}; not reached")
+
+
+def plateau(name: str, d: dict) -> None:
+    c = d["cases"]
+    s = c[c["rt"].astype(float) >= SATURATED_RT]
+    if s.empty:
+        return
+    above, below = int((s["E_lo"] > 1).sum()), int((s["E_hi"] < 1).sum())
+    print(f"\n{name}, Rt/D50 ≥ {SATURATED_RT:g} ({len(s)} cases): E {s['E'].min():.2f}–{s['E'].max():.2f}, "
+          f"mean {s['E'].mean():.3f}; intervals above 1: {above}, containing 1: {len(s) - above - below}, below 1: {below}")
+
+
+def three_vs_two(d2: dict, d3: dict) -> None:
+    print("\n| Rt/D50 | μs | E quasi-2D | E 3D | 3D − 2D (95 %) | verdict (± 0.05) | tan δ 3D − 2D (95 %) | verdict (± 0.03) |")
+    print("|---|---|---|---|---|---|---|---|")
+    c2 = d2["cases"].set_index(["rt", "friction_ps"])
+    for _, r3 in d3["cases"].sort_values(["friction_ps", "rt"]).iterrows():
+        key = (r3["rt"], r3["friction_ps"])
+        if key not in c2.index:
+            continue
+        r2 = c2.loc[key]
+        p2 = d2["seeds"].loc[d2["seeds"]["case"] == r2["case"], "peak"].to_numpy(float)
+        p3 = d3["seeds"].loc[d3["seeds"]["case"] == r3["case"], "peak"].to_numpy(float)
+        de, lo, hi, v = e_difference(p2, d2["soil"], p3, d3["soil"])
+        t = difference(p2, p3, TOL_TAN)
+        print(f"| {key[0]:g} | {key[1]:g} | {_e(r2)} | {_e(r3)} | {de:+.2f} ({lo:+.2f}, {hi:+.2f}) | {v} "
+              f"| {t.change:+.3f} ({t.change_lo:+.3f}, {t.change_hi:+.3f}) | {t.verdict} |")
+    print(f"\n(E tolerance ± {TOL_E}; the two cells' soils differ, so E's difference carries both soil tests' scatter)")
+
+
+def main() -> None:
+    data = {name: load(folder) for name, folder in CELLS.items() if (folder / "summaries.csv").exists()}
+    for name, d in data.items():
+        e_table(name, d)
+        saturation(name, d)
+        plateau(name, d)
+    if len(data) == 2:
+        three_vs_two(data["quasi-2D"], data["3D"])
+
+
+if __name__ == "__main__":
+    main()
