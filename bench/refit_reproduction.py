@@ -9,9 +9,10 @@ the criterion's check against every case, and the findings tables.
 --kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/group1/.
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
 repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
-(and, with --figures, its figures to docs/reproduction/figures/); any other set's
-correlations.csv, criterion.json, criterion_check.md (and, with --figures, the figures its folder
-already holds) to its folder.
+(and, with --figures, its figures to docs/reproduction/figures/); any other set's correlations.csv,
+criterion.json, criterion_check.md, ensembles.csv (and, with --figures, the figures its folder
+already holds) to its folder: every committed number then comes from the committed curves (float32;
+a report on the runs themselves differs from them in the fourth digit).
 Bootstrap refits per correlation: 99 (the shipped criterion's count) unless --boot.
 """
 
@@ -72,7 +73,7 @@ def commit(name: str, report: Path, figures: bool) -> None:
         return
     dest = SETS[name][0]
     shutil.copy(report / "criterion.json", dest / "criterion.json")
-    for table in ("correlations.csv", "criterion_check.md"):
+    for table in ("correlations.csv", "criterion_check.md", "ensembles.csv"):
         shutil.copy(report / "tables" / table, dest / table)
     if figures:
         for png in dest.glob("*.png"):

@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from interphase.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,3 +66,26 @@ def test_simulate_refuses_what_only_the_criterion_uses(tmp_path, capsys):
     for extra in (["--tan-phi", "0.7"], ["--fit", str(FIT)], ["--d50", "0.7"]):
         code, err = _predict(capsys, "--simulate", "--soil", card, "--runs", str(tmp_path / "runs"), *extra)
         assert code == 2 and extra[0] in err and not (tmp_path / "runs").exists(), err
+
+
+def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
+    """soils/karlsruhe-fine-sand-2d.toml names the criterion fitted on its Group 1
+    (docs/reproduction/real_sand/2d/criterion.json): predict --soil answers on a tooth inside the
+    fitted θa range with δ and its interval, from θa–θr lines fitted per friction (eight surfaces a
+    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs)."""
+    import pandas as pd
+
+    card = ROOT / "soils" / "karlsruhe-fine-sand-2d.toml"
+    saw = tmp_path / "saw.txt"
+    assert main(["profile", "sawtooth", "--rt", "0.5", "--sw", "2", "--d50", "0.14", "--length", "6",
+                 "-o", str(saw)]) == 0
+    capsys.readouterr()
+    code = main(["predict", str(saw), "--friction", "0.2", "--soil", str(card), "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["soil"] == str(card) and out["d50_mm"] == 0.14
+    fit = json.loads(Path(out["fit"]).read_text())
+    assert fit["source"].startswith("campaign group1-kfs-2d")
+    assert {"0.05", "0.2", "0.5"} <= set(fit["theta_r"]), fit["reasons"]
+    ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "2d" / "ensembles.csv")
+    assert fit["tan_phi"] == pytest.approx(ens["tan_phi"].median(), rel=1e-9)
+    assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
