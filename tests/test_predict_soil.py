@@ -89,3 +89,5 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "2d" / "ensembles.csv")
     assert fit["tan_phi"] == pytest.approx(ens["tan_phi"].median(), rel=1e-9)
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
+    code, err = _predict(capsys, "--soil", str(card))            # dektak-1 at D50 0.14 mm: θa 2.5°
+    assert code == 2 and "outside the fitted range" in err and "--simulate" in err, err

@@ -747,7 +747,13 @@ def _cmd_predict(args) -> int:
         raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
     prof = _load_measured(args.profile, args.units)
     model = criterion_model(args.friction, fit, args.tan_phi)
-    res = predict_profile(model, prof, d50, args.friction, args.filter)
+    try:
+        res = predict_profile(model, prof, d50, args.friction, args.filter)
+    except InputError as exc:
+        if soil is None or exc.where != "PROFILE":
+            raise
+        raise InputError(exc.message, where=exc.where, fix=f"{exc.fix}, or add --simulate to run the DEM on this "
+                         "profile with the card's grains") from exc
     p, flat_spaced, why = res.prediction, res.flat_spaced, res.flat_spacing_reason
     out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "fit": str(fit) if fit else "reproduction",
                            "fit_source": model.source, "soil": soil,
