@@ -72,7 +72,8 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     """soils/karlsruhe-fine-sand-2d.toml names the criterion fitted on its Group 1
     (docs/reproduction/real_sand/2d/criterion.json): predict --soil answers on a tooth inside the
     fitted θa range with δ and its interval, from θa–θr lines fitted per friction (eight surfaces a
-    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs)."""
+    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs); a
+    measured profile outside the fitted θa range is refused, naming --simulate."""
     import pandas as pd
 
     card = ROOT / "soils" / "karlsruhe-fine-sand-2d.toml"
