@@ -53,7 +53,9 @@ def lattice_packing(case: Case, x_min: float, x_max: float, z_floor: float) -> P
     per_row = int(math.floor((x_max - x_min) / pitch - 0.5))
     if per_row < 2:
         raise InputError(f"the box is {x_max - x_min:.4g} m long, less than three grains",
-                         where="case.box_length_d50", fix="make the box at least 3 D50 long")
+                         where="case.box_length_d50",
+                         fix=f"make the box at least {math.ceil(25 * pitch / case.d50) / 10:g} D50 long: 2.5 lattice "
+                             f"pitches of the largest grain ({case.gradation.d_max / case.d50:.2f} D50)")
     k = np.arange(n)
     row, col = k // per_row, k % per_row
     x = x_min + pitch * (col + 0.5 + 0.5 * (row % 2)) + rng.uniform(-0.01, 0.01, n) * pitch
