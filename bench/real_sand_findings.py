@@ -29,11 +29,12 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).parent))
-from three_d_comparison import TOL_E, TOL_TAN, _Curves, e_difference  # noqa: E402
+from three_d_comparison import TOL_E, TOL_TAN, e_difference  # noqa: E402
 
 from interphase.analysis.difference import difference  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
 from interphase.campaign.compare import seed_values  # noqa: E402
+from interphase.campaign.results import CommittedCurves  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CELLS = {"quasi-2D": ROOT / "docs" / "reproduction" / "real_sand" / "2d",
@@ -45,7 +46,7 @@ def load(folder: Path) -> dict:
     """The cell's ensembles (one row per physical interface case, with rt and μs), per-seed peaks
     (interface by case, soil tests pooled) and the soil's tan φ."""
     summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "pair_id": str})
-    store = _Curves(folder / "curves.parquet")
+    store = CommittedCurves(folder / "curves.parquet")
     table = ensemble_table(summ, store)
     seeds = seed_values(summ, store)
     iface = summ[summ["test"] == "interface"].copy()

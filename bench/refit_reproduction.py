@@ -25,11 +25,9 @@ from pathlib import Path
 
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_coverage import _Curves  # noqa: E402
-
-from interphase.campaign.schema import load_campaign  # noqa: E402
-from interphase.report.build import analyse, write  # noqa: E402
+from interphase.campaign.results import CommittedCurves
+from interphase.campaign.schema import load_campaign
+from interphase.report.build import analyse, write
 
 ROOT = Path(__file__).resolve().parents[1]
 REPRO = ROOT / "docs" / "reproduction"
@@ -39,17 +37,10 @@ SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "kfs3d": (REPRO / "real_sand" / "3d" / "group1", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
 
 
-class CommittedRuns(_Curves):
-    """A store with the committed curves and no case folders (provenance from the summaries)."""
-
-    def case_folder(self, cid):
-        return Path("/nonexistent-runs-folder") / str(cid)      # reads of it fail: no provenance, no series
-
-
 def refit(name: str, out: Path, n_boot: int, figures: bool):
     folder, campaign_file = SETS[name]
     summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str})
-    store = CommittedRuns(folder / "curves.parquet")
+    store = CommittedCurves(folder / "curves.parquet")
     try:
         campaign = load_campaign(campaign_file)
     except Exception as exc:                 # the input tables are decoration: fit without them

@@ -45,21 +45,10 @@ from scipy import stats
 
 from interphase.analysis.ensemble import ratio_interval
 from interphase.analysis.ensemble_table import ensemble_tables
+from interphase.campaign.results import CommittedCurves as _Curves
 
 ROOT = Path(__file__).resolve().parents[1]
 REPRO = ROOT / "docs" / "reproduction"
-
-
-class _Curves:
-    """store.curve() from the committed curves table."""
-
-    def __init__(self, path: Path):
-        c = pd.read_parquet(path)
-        self.by_id = {cid: (g["shear_disp"].to_numpy(float), g["stress_ratio"].to_numpy(float))
-                      for cid, g in c.groupby("case_id", sort=False)}
-
-    def curve(self, cid):
-        return self.by_id.get(str(cid))
 
 
 def populations() -> list[dict]:

@@ -31,6 +31,7 @@ from scipy import stats
 
 from interphase.analysis.difference import difference, verdict
 from interphase.analysis.ensemble_table import ensemble_table
+from interphase.campaign.results import CommittedCurves as _Curves
 from interphase.campaign.compare import seed_values
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,16 +39,6 @@ CAMPAIGN = ROOT / "campaigns" / "three_d" / "compare_2d3d.toml"
 SAVED = ROOT / "docs" / "reproduction" / "three_d"
 STUDY = ROOT / "docs" / "reproduction" / "ensembles.csv"
 TOL_TAN, TOL_E = 0.03, 0.05
-
-
-class _Curves:
-    def __init__(self, path: Path):
-        c = pd.read_parquet(path)
-        self.by_id = {str(cid): (g["shear_disp"].to_numpy(float), g["stress_ratio"].to_numpy(float))
-                      for cid, g in c.groupby("case_id", sort=False)}
-
-    def curve(self, cid):
-        return self.by_id.get(str(cid))
 
 
 def load(campaign: Path, save: Path | None):

@@ -83,6 +83,24 @@ def write_curves(summaries: pd.DataFrame, store, path: Path, points: int = CURVE
     return path
 
 
+class CommittedCurves:
+    """A store-like reader of committed tables: `.curve(case_id)` from a curves.parquet that
+    write_curves wrote, for the report's analysis (report.build.analyse) and the seed ensembles
+    without a runs folder. It has no case folders: `case_folder` names one that does not exist, so
+    what is read from a run's folder (provenance, series) is taken from the summaries or left out."""
+
+    def __init__(self, path: str | Path):
+        c = pd.read_parquet(path)
+        self.by_id = {str(cid): (g["shear_disp"].to_numpy(float), g["stress_ratio"].to_numpy(float))
+                      for cid, g in c.groupby("case_id", sort=False, observed=True)}
+
+    def curve(self, case_id):
+        return self.by_id.get(str(case_id))
+
+    def case_folder(self, case_id) -> Path:
+        return Path("/nonexistent-runs-folder") / str(case_id)
+
+
 def open_campaign(campaign_path: str | Path, output: str | Path | None = None, engines=None):
     """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
     runs' folder when not where the file says, as `campaign run --output` wrote them; `engines`: the

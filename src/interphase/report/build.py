@@ -80,20 +80,29 @@ CHECK_COLUMNS = {"fold": "fold", "group": "group", "physical_case": "case", "fri
 def criterion_checks(chain: CriterionModel, points: pd.DataFrame) -> pd.DataFrame | None:
     """check_cases with the campaign's own fits (fold 'in-sample') and, when there are at least two
     groups, with fits made WITHOUT each group on that group (fold 'group held out': the criterion
-    predicting surfaces it has not seen, as a user's new surface). The two-constant rule is fitted on
-    the same cases in each fold (fit_rule). None without θa–θr and E–θr fits."""
+    predicting surfaces it has not seen, as a user's new surface). A campaign of one group (a Group 1
+    design: one family of surfaces at several frictions) holds out each surface instead, all its
+    frictions together (fold 'surface held out', surfaces told apart by θa > 92°); the lowest and
+    highest θa are then outside the other surfaces' fits and stay unpredicted. The two-constant rule
+    is fitted on the same cases in each fold (fit_rule). None without θa–θr and E–θr fits."""
     from interphase.analysis.correlations import fit_study
 
     if not chain.theta_r or chain.efficiency is None or points.empty:
         return None
     folds = [check_cases(chain, points, fit_rule(points)).assign(fold="in-sample")]
     groups = points["group"].astype(str)
+    surface = pd.to_numeric(points["theta_a_deg_92"], errors="coerce").round(6)
     if groups.nunique() >= 2:
-        keys = [SPECS[k] for k in ("fig6_8", "fig6_9", "fig6_10a")]
-        for g in sorted(groups.unique()):
-            rest = points[groups != g]
-            model = criterion_from_fits(fit_study(rest, keys, n_boot=0), rest, f"without {g}")
-            folds.append(check_cases(model, points[groups == g], fit_rule(rest)).assign(fold="group held out"))
+        held = [(groups == g, f"without {g}", "group held out") for g in sorted(groups.unique())]
+    elif surface.nunique() >= 3:
+        held = [(surface == a, f"without θa {a:.1f}°", "surface held out") for a in sorted(surface.dropna().unique())]
+    else:
+        held = []
+    keys = [SPECS[k] for k in ("fig6_8", "fig6_9", "fig6_10a")]
+    for out, source, fold in held:
+        rest = points[~out]
+        model = criterion_from_fits(fit_study(rest, keys, n_boot=0), rest, source)
+        folds.append(check_cases(model, points[out], fit_rule(rest)).assign(fold=fold))
     return pd.concat(folds, ignore_index=True)
 
 
@@ -118,13 +127,15 @@ def check_notes(checks: pd.DataFrame) -> list[str]:
 
 
 def _rule_note(fold: str, checks: pd.DataFrame) -> list[str]:
-    """The two-constant rule's constants in a fold (held out: their range over the groups left out)."""
+    """The two-constant rule's constants in a fold (held out: their range over the groups or surfaces
+    left out)."""
     if "rule_a_deg" not in checks or not checks["rule_a_deg"].notna().any():
         return []
     a, b = checks["rule_a_deg"].dropna(), checks["rule_b"].dropna()
     span = lambda v, f: f"{v.min():{f}}" if v.nunique() == 1 else f"{v.min():{f}} to {v.max():{f}}"
     return [f"{fold}: δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases as the criterion"
-            f"{'' if fold == 'in-sample' else ' (without each group)'}: a = {span(a, '.2f')}°, b = {span(b, '.3f')}"]
+            f"{'' if fold == 'in-sample' else ' (without each ' + fold.split()[0] + ')'}: a = {span(a, '.2f')}°, "
+            f"b = {span(b, '.3f')}"]
 
 
 def write_criterion(model: CriterionModel, points: pd.DataFrame, path: Path, prov: str) -> Path:
