@@ -666,7 +666,7 @@ def _soil_fit(args) -> tuple[str, str]:
                          fix="run the soil's interface campaign (e.g. campaigns/real_sand/group1_kfs_3d.toml), "
                              "`campaign report` it, and set [criterion] fit = \"…/criterion.json\" in the card; "
                              "or predict with --fit")
-    path = Path(ref) if Path(ref).is_absolute() else card.path.parent / ref
+    path = Path(ref) if Path(ref).is_absolute() else (card.path.parent / ref).resolve()
     if not path.exists():
         raise InputError(f"the card's criterion file {path} does not exist", where=f"{card.path}: [criterion] fit",
                          fix="the path is relative to the card; `campaign report` writes criterion.json")
