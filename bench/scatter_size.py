@@ -1,0 +1,155 @@
+"""Issue 39 item 2: the seed scatter against the cell's size, and what E ± 0.05 over the study would
+cost with each size (campaigns/precision/scatter_size.toml: the soil test and saw-teeth Rt/D50 0.2
+and 1 at μs 0.5, cells 40 × 25, 60 × 35, 80 × 50 D50, 8 seeds each).
+
+    PYTHONPATH=src python bench/scatter_size.py [--save DIR] [--committed DIR] [--trials N]
+
+Reads the campaign's runs, or without them the committed copy (docs/reproduction/precision/
+scatter_size/: summaries.csv, curves.parquet, or --committed DIR); --save writes that copy from the
+runs. Per cell
+(box_length_d50 × box_height_d50), per test: the seeds; the per-seed SD of the leave-one-out peak
+(tan φ of the soil test, tan δ of each surface: analysis.ensemble.seed_states as the report reads
+them) with its 95 % chi-square interval, and of E per seed (the seed's interface peak over its
+paired soil test's); the mean wall per run (`elapsed`, one run per core; of the runs made on this
+machine when the table says which, `ran_here`: the restored 40 × 25 runs ran elsewhere); and the price of a
+half-width: the seeds for a 95 % half-width h are n ≈ (t·sd/h)², so a size's core-hours for a given
+h scale as sd² × wall per run (printed relative to 40 × 25).
+Then the study at E ± 0.05 with each size: bench/sequential_bill.py's projection (the sequential
+rule on Normal(case mean, case sd) draws of every physical case of the committed study, cap 24, soil
+on 40 or 80 seeds) with every case's interface sd scaled by the size's measured ratio to 40 × 25
+(mean over the two surfaces), the soil's by its ratio, and each run's wall by the size's ratio.
+A measurement: exit 0 whatever it finds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+sys.path.insert(0, str(Path(__file__).parent))
+from sequential_bill import project, run_times  # noqa: E402
+from sequential_coverage import populations  # noqa: E402
+
+from interphase.campaign.compare import seed_values  # noqa: E402
+from interphase.campaign.results import CommittedCurves, write_curves  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+CAMPAIGN = ROOT / "campaigns" / "precision" / "scatter_size.toml"
+SAVED = ROOT / "docs" / "reproduction" / "precision" / "scatter_size"
+CELL = ["box_length_d50", "box_height_d50"]
+REFERENCE = (40.0, 25.0)
+
+
+def load(save: Path | None, committed: Path = SAVED):
+    """(summaries, curve store) of the campaign's runs (saved to `save`), else of the committed copy."""
+    try:
+        from interphase.campaign.results import open_campaign
+
+        _, store, summ = open_campaign(CAMPAIGN)
+    except Exception as exc:      # noqa: BLE001 — no runs here: the committed copy
+        print(f"(no runs of {CAMPAIGN.name}: {str(exc).splitlines()[0]}; reading {committed})")
+        return (pd.read_csv(committed / "summaries.csv", dtype={"case_id": str, "pair_id": str}),
+                CommittedCurves(committed / "curves.parquet"))
+    import json
+
+    from interphase.campaign.restore import is_restored
+
+    # a restored run's wall is the machine's that ran it: the price compares walls of runs made here
+    summ["ran_here"] = [not is_restored(json.loads((store.case_folder(c) / "case.json").read_text()))
+                        for c in summ["case_id"].astype(str)]
+    if save:
+        save.mkdir(parents=True, exist_ok=True)
+        summ.to_csv(save / "summaries.csv", index=False)
+        write_curves(summ, store, save / "curves.parquet")
+    return summ, store
+
+
+def sd_interval(v: np.ndarray) -> tuple[float, float, float]:
+    """Sample SD (ddof 1) with its 95 % chi-square interval."""
+    n, s = v.size, float(np.std(v, ddof=1))
+    return s, s * math.sqrt((n - 1) / stats.chi2.ppf(0.975, n - 1)), s * math.sqrt((n - 1) / stats.chi2.ppf(0.025, n - 1))
+
+
+def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
+    """One row per (cell, test, quantity): seeds, mean, SD and its interval, wall per run [s]."""
+    rows = []
+    for cell, s in summ.groupby(CELL, sort=True):
+        seeds = seed_values(s, store)
+        here = s["ran_here"].astype(bool) if "ran_here" in s else pd.Series(True, index=s.index)
+        wall = (s.assign(_case=s["label"].str.replace(r"-s\d+$", "", regex=True), _here=here)
+                .groupby("_case").apply(lambda g: g.loc[g["_here"], "elapsed"].mean() if g["_here"].any()
+                                        else g["elapsed"].mean(), include_groups=False))
+        for case, g in seeds.groupby("case", sort=True):
+            test = g["test"].iloc[0]
+            for q, col in ((("tan_phi", "peak"),) if test == "box" else (("tan_delta", "peak"), ("E", "E"))):
+                v = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
+                if v.size < 2:
+                    continue
+                sd, lo, hi = sd_interval(v)
+                rows.append(dict(length=cell[0], height=cell[1], case=case, test=test, quantity=q, seeds=v.size,
+                                 mean=v.mean(), sd=sd, sd_lo=lo, sd_hi=hi, wall_s=float(wall.get(case, math.nan))))
+    return pd.DataFrame(rows)
+
+
+def price(t: pd.DataFrame) -> pd.DataFrame:
+    """sd² × wall per run of each row over the same case's at 40 × 25: a size's relative core-hours
+    for a given half-width (same quantity, same surface)."""
+    t = t.copy()
+    t["surface"] = t["case"].str.extract(r"(rt[\d.]+)", expand=False).fillna("soil")
+    ref = t[(t["length"] == REFERENCE[0]) & (t["height"] == REFERENCE[1])].set_index(["surface", "quantity"])
+    key = list(zip(t["surface"], t["quantity"]))
+    t["sd_ratio"] = t["sd"].to_numpy() / ref["sd"].reindex(key).to_numpy()
+    t["wall_ratio"] = t["wall_s"].to_numpy() / ref["wall_s"].reindex(key).to_numpy()
+    t["price_ratio"] = t["sd_ratio"] ** 2 * t["wall_ratio"]
+    return t
+
+
+def study_bill(t: pd.DataFrame, trials: int) -> None:
+    """The study at E ± 0.05 with each size (sequential_bill.project on scaled populations)."""
+    pops = populations()
+    times, box_time, today, _ = run_times()
+    soils = len({p["b"].tobytes() for p in pops})
+    print("\n| cell [D50] | interface sd × | soil sd × | wall × (interface, soil) | soil seeds | cases reaching ± 0.05 | mean seeds | core-hours |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (length, height), c in t.groupby(["length", "height"], sort=True):
+        iface = c[(c["test"] == "interface") & (c["quantity"] == "tan_delta")]
+        soil = c[c["test"] == "box"]
+        if iface.empty or soil.empty:
+            continue
+        ka, kb = float(iface["sd_ratio"].mean()), float(soil["sd_ratio"].iloc[0])
+        wa, wb = float(iface["wall_ratio"].mean()), float(soil["wall_ratio"].iloc[0])
+        scaled = [dict(p, a=p["a"].mean() + ka * (p["a"] - p["a"].mean()), b=p["b"].mean() + kb * (p["b"] - p["b"].mean()))
+                  for p in pops]
+        for m in (40, 80):
+            r = project(scaled, {k: v * wa for k, v in times.items()}, "E", 0.05, 24, m, trials,
+                        np.random.default_rng(1))
+            h = r["hours"] + soils * m * box_time * wb / 3600
+            print(f"| {length:g} × {height:g} | {ka:.2f} | {kb:.2f} | {wa:.2f}, {wb:.2f} | {m} | {r['reached']:.0%} "
+                  f"| {r['seeds']:.1f} | {h:.0f} |")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--save", type=Path, default=None)
+    ap.add_argument("--committed", type=Path, default=SAVED)
+    ap.add_argument("--trials", type=int, default=2000)
+    args = ap.parse_args(argv)
+    summ, store = load(args.save, args.committed)
+    t = price(cell_rows(summ, store))
+    print("| cell [D50] | test | quantity | seeds | mean | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in t.sort_values(["surface", "quantity", "length"]).itertuples():
+        print(f"| {r.length:g} × {r.height:g} | {r.surface} | {r.quantity} | {r.seeds} | {r.mean:.3f} "
+              f"| {r.sd:.4f} ({r.sd_lo:.4f}–{r.sd_hi:.4f}) | {r.wall_s:.0f} | {r.sd_ratio:.2f} | {r.wall_ratio:.2f} "
+              f"| {r.price_ratio:.2f} |")
+    study_bill(t, args.trials)
+
+
+if __name__ == "__main__":
+    main()
