@@ -158,3 +158,24 @@ def test_random_scans_with_holes_match_the_reference(seed, holes, n_lines):
 def test_blocked_dilation_equals_the_trace_modules(n, R):
     z = np.random.default_rng(n).normal(size=n) * 5
     np.testing.assert_array_equal(dilate_blocks(z, R), dilate_half_disk(z, R, False))
+
+
+def test_predict_reads_an_areal_scan_along_the_axis_it_is_sheared(capsys):
+    """`campaign predict SCAN --axis x|y` on a real instrument scan (frt-1.frt, FRT MicroProf): θa is
+    the one `campaign theta-a` reads for that direction (every grid line pooled), flat spacing is
+    judged line by line and said so, δ comes with its interval; --axis on a line profile is refused."""
+    import json
+
+    from interphase.cli import main
+
+    for axis in ("x", "y"):
+        assert main(["theta-a", str(FRT1), "--d50", "0.7", "--axis", axis, "--json"]) == 0
+        theta = json.loads(capsys.readouterr().out)["theta_a_deg"]
+        assert main(["predict", str(FRT1), "--d50", "0.7", "--friction", "0.2", "--axis", axis, "--json"]) == 0
+        d = json.loads(capsys.readouterr().out)
+        assert d["theta_a_deg_92"] == pytest.approx(theta, rel=1e-12) and math.isfinite(theta)
+        assert f"lines along {axis}" in d["flat_spacing_reason"] and not d["flat_spaced"]
+        assert d["delta_deg_lo"] < d["delta_deg"] < d["delta_deg_hi"]
+    line = Path(__file__).parent / "data" / "dektak-1.csv"
+    assert main(["predict", str(line), "--d50", "0.7", "--friction", "0.2", "--units", "um", "--axis", "y"]) == 2
+    assert "--axis" in capsys.readouterr().err

@@ -114,25 +114,32 @@ def ensembles(campaign, *, runs: PathLike | None = None):
 
 
 def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,
-            tan_phi: float | None = None, units: str | None = None) -> dict:
-    """The criterion chain for a surface profile (as `campaign predict --json`): θa → θr → E →
-    tan δ. `d50_mm` [mm], `friction` = tan φμ particle–surface [-]; `fit`: a campaign file, a
-    criterion.json or 'study' (default: the reproduction's fits shipped with the package);
-    `tan_phi` of your soil (default: the fits' simulated soil). Returns a dict: theta_a_deg,
+            tan_phi: float | None = None, units: str | None = None, axis: str = "x") -> dict:
+    """The criterion chain for a surface profile or areal scan (as `campaign predict --json`): θa →
+    θr → E → tan δ. `d50_mm` [mm], `friction` = tan φμ particle–surface [-]; `fit`: a campaign file,
+    a criterion.json or 'study' (default: the reproduction's fits shipped with the package);
+    `tan_phi` of your soil (default: the fits' simulated soil); `axis`: an areal scan's shear
+    direction (+x or +y, every grid line along it pooled). Returns a dict: theta_a_deg,
     theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes."""
     import math
 
-    from interphase.analysis.criterion import predict_profile
+    from interphase.analysis.criterion import predict_profile, predict_scan
     from interphase.errors import InputError
     from interphase.report.build import criterion_model
-    from interphase.surface.readers import load_profile
+    from interphase.surface.readers import load_profile, read_scan
 
     if not (isinstance(d50_mm, (int, float)) and math.isfinite(d50_mm) and d50_mm > 0):
         raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm")
     if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
         raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
     model = criterion_model(friction, fit, tan_phi)
-    res = predict_profile(model, load_profile(str(profile), units, None), d50_mm * 1e-3, friction, None)
+    scan = read_scan(str(profile), units)
+    if not scan.areal and axis != "x":
+        raise InputError("a line profile has only the x axis", where="axis", fix="omit axis for a line")
+    if scan.areal:
+        res = predict_scan(model, scan, d50_mm * 1e-3, friction, axis)
+    else:
+        res = predict_profile(model, load_profile(str(profile), units, None), d50_mm * 1e-3, friction, None)
     return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
 
 

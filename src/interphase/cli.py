@@ -504,7 +504,10 @@ def _add_report(sub) -> None:
     p.set_defaults(func=_cmd_pack)
 
     p = sub.add_parser("predict", help="interface friction from a profile: θa → θr → E → tan δ")
-    p.add_argument("profile", help="profile file: Dektak export or two columns x z")
+    p.add_argument("profile", help="profile or areal scan: a Dektak export, two columns x z, or any format "
+                   "SurfaceTopography reads (an areal scan is read along --axis, every grid line pooled)")
+    p.add_argument("--axis", choices=("x", "y"), default=None,
+                   help="areal scans: shear along +x (default) or +y")
     p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (default with --soil: the card's)")
     p.add_argument("--friction", type=float, required=True, help="particle–surface friction tan φμ [-]")
     p.add_argument("--fit", default=None, help="correlations to use: a campaign file (TOML, fitted on its finished "
@@ -730,7 +733,7 @@ def _cmd_predict_dem(args) -> int:
 def _cmd_predict(args) -> int:
     import math
 
-    from interphase.analysis.criterion import predict_profile
+    from interphase.analysis.criterion import predict_profile, predict_scan
     from interphase.report.build import criterion_model
 
     fit, soil = args.fit, None
@@ -745,10 +748,17 @@ def _cmd_predict(args) -> int:
         raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
     if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
         raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
-    prof = _load_measured(args.profile, args.units)
+    from interphase.surface.readers import read_scan
+
+    scan = read_scan(args.profile, args.units)
+    if not scan.areal and args.axis not in (None, "x"):
+        raise InputError("a line scan has only the x axis", where="--axis", fix="omit --axis for a line")
     model = criterion_model(args.friction, fit, args.tan_phi)
     try:
-        res = predict_profile(model, prof, d50, args.friction, args.filter)
+        if scan.areal:
+            res = predict_scan(model, scan, d50, args.friction, args.axis or "x", args.filter)
+        else:
+            res = predict_profile(model, _load_measured(args.profile, args.units), d50, args.friction, args.filter)
     except InputError as exc:
         if soil is None or exc.where != "PROFILE":
             raise

@@ -418,6 +418,29 @@ def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
     return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat_spaced, why)
 
 
+def predict_scan(model: CriterionModel, scan, d50: float, friction: float, axis: str = "x",
+                 filt: int | None = None) -> ProfilePrediction:
+    """An areal scan [m] sheared along +`axis` → `predict`: θa (both filters) of the normals pooled
+    over every grid line along the axis (surface.areal.theta_a_scan, as `campaign theta-a` reads a
+    scan), and flat spacing judged line by line (regular_flat_spacing on each line with its
+    least-squares line removed; regular when more than half of the lines are)."""
+    from interphase.surface.areal import theta_a_scan
+
+    t = theta_a_scan(scan, d50, (92, 90), axes=(axis,))[f"+{axis}"]
+    s, Z = scan.lines(axis)
+    votes = []
+    for z in Z:                 # grid lines of a scan (hundreds), each judged whole
+        ok = np.isfinite(z)
+        if ok.sum() < 3:
+            continue
+        x, h = s[ok], z[ok]
+        votes.append(regular_flat_spacing(x, h - np.polyval(np.polyfit(x, h, 1), x), d50)[0])
+    flat = bool(votes) and float(np.mean(votes)) > 0.5
+    why = f"{sum(votes)} of {len(votes)} lines along {axis} with regular flat spacing"
+    p = predict(model, friction, t[92].theta_a_deg, t[90].theta_a_deg, flat, filt)
+    return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat, why)
+
+
 def _rule_of(d) -> tuple | None:
     """(a, b) of a criterion file's "rule" entry, None when absent or not finite (older files)."""
     if not d or d.get("a_deg") is None or d.get("b") is None:
