@@ -163,7 +163,8 @@ def test_blocked_dilation_equals_the_trace_modules(n, R):
 def test_predict_reads_an_areal_scan_along_the_axis_it_is_sheared(capsys):
     """`campaign predict SCAN --axis x|y` on a real instrument scan (frt-1.frt, FRT MicroProf): θa is
     the one `campaign theta-a` reads for that direction (every grid line pooled), flat spacing is
-    judged line by line and said so, δ comes with its interval; --axis on a line profile is refused."""
+    judged line by line and said so, δ comes with its interval; --axis on a line profile is refused,
+    and --simulate (the quasi-2D DEM shears one line) says how to give one line of the scan."""
     import json
 
     from interphase.cli import main
@@ -179,3 +180,7 @@ def test_predict_reads_an_areal_scan_along_the_axis_it_is_sheared(capsys):
     line = Path(__file__).parent / "data" / "dektak-1.csv"
     assert main(["predict", str(line), "--d50", "0.7", "--friction", "0.2", "--units", "um", "--axis", "y"]) == 2
     assert "--axis" in capsys.readouterr().err
+    card = Path(__file__).parents[1] / "soils" / "karlsruhe-fine-sand-2d.toml"
+    assert main(["predict", str(FRT1), "--friction", "0.2", "--soil", str(card), "--simulate"]) == 2
+    err = capsys.readouterr().err                     # the quasi-2D DEM shears one line: say how to give one
+    assert "one line" in err and 'line = "1/3"' in err and "drop --simulate" in err

@@ -711,6 +711,13 @@ def _cmd_predict_dem(args) -> int:
                              fix=f"drop {flag}, or drop --simulate")
     card = load_card(args.soil)
     _card_d50(card, args.d50, "the DEM uses the card's grains")
+    from interphase.surface.readers import read_scan
+
+    if read_scan(args.profile, args.units).areal:
+        raise InputError("an areal scan: the DEM here shears one line of it", where="--simulate",
+                         fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
+                             f"path = \"{args.profile}\", axis = \"x\", line = \"1/3\"}} (campaigns/study.toml's Group 5), "
+                             "or drop --simulate: the criterion pools every line")
     prof = _load_measured(args.profile, args.units)
     runs, runs_from = (given(args.runs, "--runs") if args.runs else
                        beside(card.path, f"runs/predict/{card.name}/{Path(args.profile).stem}", "--runs"))
