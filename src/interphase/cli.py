@@ -767,7 +767,7 @@ def _cmd_predict(args) -> int:
         else:
             res = predict_profile(model, _load_measured(args.profile, args.units), d50, args.friction, args.filter)
     except InputError as exc:
-        if soil is None or exc.where != "PROFILE":
+        if soil is None or exc.where != "PROFILE" or scan.areal:     # --simulate takes one line, not a scan
             raise
         raise InputError(exc.message, where=exc.where, fix=f"{exc.fix}, or add --simulate to run the DEM on this "
                          "profile with the card's grains") from exc
