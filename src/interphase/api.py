@@ -123,23 +123,17 @@ def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | Non
     theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes."""
     import math
 
-    from interphase.analysis.criterion import predict_profile, predict_scan
+    from interphase.analysis.criterion import predict_measured
     from interphase.errors import InputError
     from interphase.report.build import criterion_model
-    from interphase.surface.readers import load_profile, read_scan
+    from interphase.surface.readers import read_scan
 
     if not (isinstance(d50_mm, (int, float)) and math.isfinite(d50_mm) and d50_mm > 0):
         raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm")
     if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
         raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
     model = criterion_model(friction, fit, tan_phi)
-    scan = read_scan(str(profile), units)
-    if not scan.areal and axis != "x":
-        raise InputError("a line profile has only the x axis", where="axis", fix="omit axis for a line")
-    if scan.areal:
-        res = predict_scan(model, scan, d50_mm * 1e-3, friction, axis)
-    else:
-        res = predict_profile(model, load_profile(str(profile), units, None), d50_mm * 1e-3, friction, None)
+    res = predict_measured(model, read_scan(str(profile), units), d50_mm * 1e-3, friction, axis)
     return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
 
 

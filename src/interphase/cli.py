@@ -740,7 +740,7 @@ def _cmd_predict_dem(args) -> int:
 def _cmd_predict(args) -> int:
     import math
 
-    from interphase.analysis.criterion import predict_profile, predict_scan
+    from interphase.analysis.criterion import predict_measured
     from interphase.report.build import criterion_model
 
     fit, soil = args.fit, None
@@ -758,14 +758,9 @@ def _cmd_predict(args) -> int:
     from interphase.surface.readers import read_scan
 
     scan = read_scan(args.profile, args.units)
-    if not scan.areal and args.axis not in (None, "x"):
-        raise InputError("a line scan has only the x axis", where="--axis", fix="omit --axis for a line")
     model = criterion_model(args.friction, fit, args.tan_phi)
     try:
-        if scan.areal:
-            res = predict_scan(model, scan, d50, args.friction, args.axis or "x", args.filter)
-        else:
-            res = predict_profile(model, _load_measured(args.profile, args.units), d50, args.friction, args.filter)
+        res = predict_measured(model, scan, d50, args.friction, args.axis, args.filter, where="--axis")
     except InputError as exc:
         if soil is None or exc.where != "PROFILE" or scan.areal:     # --simulate takes one line, not a scan
             raise

@@ -441,6 +441,21 @@ def predict_scan(model: CriterionModel, scan, d50: float, friction: float, axis:
     return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat, why)
 
 
+def predict_measured(model: CriterionModel, scan, d50: float, friction: float, axis: str | None = None,
+                     filt: int | None = None, where: str = "axis") -> ProfilePrediction:
+    """A measured surface as read (surface.readers.read_scan, metres) → the chain: a line profile
+    centerline-corrected (predict_profile; it has only the x axis, `where` names the option that
+    gave another), an areal scan along +`axis` (predict_scan, default x)."""
+    if scan.areal:
+        return predict_scan(model, scan, d50, friction, axis or "x", filt)
+    if axis not in (None, "x"):
+        raise InputError("a line profile has only the x axis", where=where, fix=f"omit {where} for a line")
+    from interphase.surface.filters import prepare_measured
+    from interphase.surface.lines import scan_profile
+
+    return predict_profile(model, prepare_measured(scan_profile(scan)), d50, friction, filt)
+
+
 def _rule_of(d) -> tuple | None:
     """(a, b) of a criterion file's "rule" entry, None when absent or not finite (older files)."""
     if not d or d.get("a_deg") is None or d.get("b") is None:
