@@ -14,7 +14,12 @@ Prints Markdown for docs/reproduction.md:
   3. E on the teeth at Rt/D50 ≥ 1: range, mean, and how many intervals lie above 1, contain it, lie
      under it (is the interface at full mobilisation stronger than the soil's own test?);
   4. 3D − quasi-2D per physical case (Rt/D50, μs): E's difference with its interval and verdict at
-     ± 0.05 (three_d_comparison.e_difference: two soils, two interface ensembles), tan δ's at ± 0.03.
+     ± 0.05 (three_d_comparison.e_difference: two soils, two interface ensembles), tan δ's at ± 0.03;
+  5. per cell, the soil test read two ways at its peak: τ/σ on the box's horizontal plane (what the
+     box reports, what E divides by) and the specimen's own mobilised friction asin(q/p) of its
+     average stress (the Mohr circle in x–z; methods.md §6), with the major principal direction
+     from the vertical; the quasi-2D one beside the same discs' biaxial φ_peak at TMD17's state
+     (docs/soils/karlsruhe-fine-sand-2d/verification_tmd17_6seeds.csv).
 The break of E–θr and the criterion's skill are the report's (`bench/refit_reproduction.py --kfs2d
 --kfs3d`: correlations.csv, criterion_check.md). A measurement: exit 0 whatever it finds.
 """
@@ -40,6 +45,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CELLS = {"quasi-2D": ROOT / "docs" / "reproduction" / "real_sand" / "2d",
          "3D": ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "group1"}
 SATURATED_RT = 1.0        # the teeth whose E item 3 of the issue reads as the plateau
+BIAXIAL_2D = ROOT / "docs" / "soils" / "karlsruhe-fine-sand-2d" / "verification_tmd17_6seeds.csv"
 
 
 def load(folder: Path) -> dict:
@@ -129,12 +135,49 @@ def three_vs_two(d2: dict, d3: dict) -> None:
     print(f"\n(E tolerance ± {TOL_E}; the two cells' soils differ, so E's difference carries both soil tests' scatter)")
 
 
+def _mean_ci(x: np.ndarray) -> tuple[float, float, float]:
+    from scipy import stats
+    m, h = float(np.mean(x)), float(stats.t.ppf(0.975, len(x) - 1) * np.std(x, ddof=1) / math.sqrt(len(x)))
+    return m, m - h, m + h
+
+
+def box_reading(name: str, folder: Path) -> None:
+    """The soil test's peak read on the box's horizontal plane and as the specimen's Mohr circle.
+
+    At the peak snapshot the specimen's average stress (whole box) has mobilised friction
+    φ_mob = asin(q/p) and its major principal direction lies α from the vertical; the ratio on a
+    horizontal plane is then sin φ_mob·sin 2α / (1 + sin φ_mob·cos 2α), which equals tan φ_mob only
+    at α = 45° + φ_mob/2 and sin φ_mob at α = 45° (the plane of zero extension at zero dilatancy:
+    Davis 1968; Rowe 1969, Géotechnique 19(1) 75–86, the direct-shear and plane-strain φ).
+    """
+    s = pd.read_csv(folder / "summaries.csv")
+    b = s[s["test"] == "box"]
+    plane = np.degrees(np.arctan(b["peak_stress_ratio"].to_numpy(float)))
+    sphi = b["qp_region"].to_numpy(float)
+    mob = np.degrees(np.arcsin(sphi))
+    alpha = np.radians(b["principal_stress_deg_region"].to_numpy(float))
+    mohr_plane = np.degrees(np.arctan(sphi * np.sin(2 * alpha) / (1 + sphi * np.cos(2 * alpha))))
+    f = "{:.1f}° ({:.1f}–{:.1f}°)"
+    print(f"\n{name} soil test at its peak, {len(b)} seeds (mean, 95 %): the box's horizontal plane "
+          f"{f.format(*_mean_ci(plane))}; the specimen's Mohr circle asin(q/p) {f.format(*_mean_ci(mob))}, "
+          f"major principal stress {f.format(*_mean_ci(np.degrees(alpha)))} from the vertical; Mohr's ratio on "
+          f"the horizontal plane at that direction {f.format(*_mean_ci(mohr_plane))} (the region's tensor at "
+          f"the peak snapshot; the box's plane from History); atan(sin φ_mob) {f.format(*_mean_ci(np.degrees(np.arctan(sphi))))}")
+    if name == "quasi-2D" and BIAXIAL_2D.exists():
+        v = pd.read_csv(BIAXIAL_2D).iloc[0]
+        print(f"  the same discs' biaxial φ_peak ({v['record']}, {int(v['n_seeds'])} seeds): "
+              f"{v['phi_peak_deg']:.1f}° ({v['phi_peak_deg_lo']:.1f}–{v['phi_peak_deg_hi']:.1f}°)")
+
+
 def main() -> None:
     data = {name: load(folder) for name, folder in CELLS.items() if (folder / "summaries.csv").exists()}
     for name, d in data.items():
         e_table(name, d)
         saturation(name, d)
         plateau(name, d)
+    for name, folder in CELLS.items():
+        if (folder / "summaries.csv").exists():
+            box_reading(name, folder)
     if len(data) == 2:
         three_vs_two(data["quasi-2D"], data["3D"])
 
