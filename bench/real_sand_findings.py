@@ -38,6 +38,7 @@ from three_d_comparison import TOL_E, TOL_TAN, e_difference  # noqa: E402
 
 from interphase.analysis.difference import difference  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
+from interphase.analysis.soil_test import soil_test_readings  # noqa: E402
 from interphase.campaign.compare import seed_values  # noqa: E402
 from interphase.campaign.results import CommittedCurves  # noqa: E402
 
@@ -135,34 +136,17 @@ def three_vs_two(d2: dict, d3: dict) -> None:
     print(f"\n(E tolerance ± {TOL_E}; the two cells' soils differ, so E's difference carries both soil tests' scatter)")
 
 
-def _mean_ci(x: np.ndarray) -> tuple[float, float, float]:
-    from scipy import stats
-    m, h = float(np.mean(x)), float(stats.t.ppf(0.975, len(x) - 1) * np.std(x, ddof=1) / math.sqrt(len(x)))
-    return m, m - h, m + h
-
-
 def box_reading(name: str, folder: Path) -> None:
-    """The soil test's peak read on the box's horizontal plane and as the specimen's Mohr circle.
+    """The soil test's peak read on the box's plane and as the specimen's Mohr circle
+    (analysis.soil_test), the quasi-2D one beside the same discs' biaxial φ_peak."""
+    r = soil_test_readings(pd.read_csv(folder / "summaries.csv")).iloc[0]
 
-    At the peak snapshot the specimen's average stress (whole box) has mobilised friction
-    φ_mob = asin(q/p) and its major principal direction lies α from the vertical; the ratio on a
-    horizontal plane is then sin φ_mob·sin 2α / (1 + sin φ_mob·cos 2α), which equals tan φ_mob only
-    at α = 45° + φ_mob/2 and sin φ_mob at α = 45° (the plane of zero extension at zero dilatancy:
-    Davis 1968; Rowe 1969, Géotechnique 19(1) 75–86, the direct-shear and plane-strain φ).
-    """
-    s = pd.read_csv(folder / "summaries.csv")
-    b = s[s["test"] == "box"]
-    plane = np.degrees(np.arctan(b["peak_stress_ratio"].to_numpy(float)))
-    sphi = b["qp_region"].to_numpy(float)
-    mob = np.degrees(np.arcsin(sphi))
-    alpha = np.radians(b["principal_stress_deg_region"].to_numpy(float))
-    mohr_plane = np.degrees(np.arctan(sphi * np.sin(2 * alpha) / (1 + sphi * np.cos(2 * alpha))))
-    f = "{:.1f}° ({:.1f}–{:.1f}°)"
-    print(f"\n{name} soil test at its peak, {len(b)} seeds (mean, 95 %): the box's horizontal plane "
-          f"{f.format(*_mean_ci(plane))}; the specimen's Mohr circle asin(q/p) {f.format(*_mean_ci(mob))}, "
-          f"major principal stress {f.format(*_mean_ci(np.degrees(alpha)))} from the vertical; Mohr's ratio on "
-          f"the horizontal plane at that direction {f.format(*_mean_ci(mohr_plane))} (the region's tensor at "
-          f"the peak snapshot; the box's plane from History); atan(sin φ_mob) {f.format(*_mean_ci(np.degrees(np.arctan(sphi))))}")
+    def f(c: str) -> str:
+        return f"{r[c]:.1f}° ({r[c + '_lo']:.1f}–{r[c + '_hi']:.1f}°)"
+    print(f"\n{name} soil test at its peak, {int(r['seeds'])} seeds (mean, 95 %): the box's plane {f('phi_plane_deg')}; "
+          f"the specimen's Mohr circle asin(q/p) {f('phi_mob_deg')}, major principal stress {f('principal_deg')} "
+          f"from the vertical; Mohr's ratio on the horizontal plane there {f('phi_mohr_plane_deg')}; "
+          f"atan(sin φ_mob) {f('phi_sin_deg')}")
     if name == "quasi-2D" and BIAXIAL_2D.exists():
         v = pd.read_csv(BIAXIAL_2D).iloc[0]
         print(f"  the same discs' biaxial φ_peak ({v['record']}, {int(v['n_seeds'])} seeds): "

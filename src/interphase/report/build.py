@@ -34,6 +34,7 @@ from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, pre
 from interphase.analysis.criterion import (CriterionModel, check_cases, check_summary, fit_rule, fitted_soil_tan_phi,
                                            skill)
 from interphase.analysis.ensemble_table import ensemble_tables
+from interphase.analysis.soil_test import soil_test_readings
 from interphase.campaign.results import open_campaign, recipe_notes, write_curves, write_summaries
 from interphase.errors import InputError
 from interphase.report import figures as F
@@ -376,6 +377,9 @@ def _tables(m: ReportModel) -> list:
         if len(high):
             m.warnings.append(f"{len(high)} physical case(s) with seed-ensemble E > {T.E_NOTE:g}: see the note "
                               "column of the ensembles table and docs/strength.md")
+    readings = soil_test_readings(m.summaries)
+    if not readings.empty:
+        tables.append(T.soil_tests_table(readings))
     tables.append(T.coefficient_table(m.fits))
     if m.criterion_check is not None:
         shown = m.criterion_check[list(CHECK_COLUMNS)].rename(columns=CHECK_COLUMNS)

@@ -318,6 +318,24 @@ def ensembles_table(df: pd.DataFrame) -> Table:
                  csv=df)
 
 
+def soil_tests_table(df: pd.DataFrame) -> Table:
+    """The soil tests read two ways at their peak (analysis.soil_test.soil_test_readings)."""
+    from interphase.analysis.soil_test import READINGS
+
+    heads = {"phi_plane_deg": "φ on the box's plane [°]", "phi_mob_deg": "φ_mob = asin(q/p) [°]",
+             "principal_deg": "σ1 from vertical [°]", "phi_mohr_plane_deg": "Mohr's plane reading [°]",
+             "phi_sin_deg": "atan(sin φ_mob) [°]"}
+    shown = pd.DataFrame({"soil test": df["case"], "seeds": df["seeds"]})
+    for col in READINGS:
+        shown[heads[col]] = [_with_interval(v, a, b, 1) for v, a, b in zip(df[col], df[col + "_lo"], df[col + "_hi"])]
+    return Table("soil_tests", "Soil tests at their peak: the box's plane and the specimen's Mohr circle",
+                 shown.reset_index(drop=True),
+                 ["; ".join(f"{heads[c]}: {w}" for c, w in READINGS.items()) + ". A triaxial or biaxial test "
+                  "reads φ_mob; the box reads its plane, tan φ_ds = sin φ_mob at σ1 45° from the vertical "
+                  "(docs/soils.md, 'Direct shear and the laboratory's test on one card').", INTERVAL_NOTE],
+                 csv=df)
+
+
 def findings_tables(points: pd.DataFrame) -> list[Table]:
     """The cross-group findings (analysis.findings) that the points can answer: the > 92° filter
     (Fig. 6.7), Rnc's uniqueness (Fig. 6.5), Group 2's θa by spacing. None without Group 1."""
