@@ -17,8 +17,9 @@ CARD = ROOT / "soils" / "karlsruhe-fine-sand.toml"
 
 
 def _card(tmp_path, extra: str = "") -> Path:
+    """A copy of the 3D card without its own [criterion] (which names files beside the shipped card)."""
     card = tmp_path / "sand.toml"
-    card.write_text(CARD.read_text() + extra)
+    card.write_text(CARD.read_text().split("\n[criterion]")[0] + extra)
     return card
 
 
@@ -92,3 +93,46 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
     code, err = _predict(capsys, "--soil", str(card))            # dektak-1 at D50 0.14 mm: θa 2.5°
     assert code == 2 and "outside the fitted range" in err and "--simulate" in err, err
+
+
+def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
+    """--simulate's interface cell (campaign.validate.interface_case): the shipped 3D card names its
+    Group 1 campaign, so a surface is sheared in that campaign's 3D cell at its 50 MPa, with the card's
+    grains; the quasi-2D card in its own campaign's quasi-2D cell; a 3D card naming no campaign in
+    the chosen 3D cell at its own stiffness, never as discs; a campaign of other grains is refused."""
+    from interphase.campaign.element import write_campaign
+    from interphase.campaign.validate import PROTOCOL_3D, interface_case, protocol_for
+    from interphase.errors import InputError
+    from interphase.soil import load_card
+
+    card3 = load_card(CARD)
+    case, why = interface_case(card3)
+    assert case["device"] == "periodic3d" and case["box_depth_d50"] == 10 and case["shear_modulus"] == 50e6
+    assert "group1_kfs_3d.toml" in why and "G 50 MPa" in why
+    assert {k: case[k] for k in card3.soil if k != "shear_modulus"} == {k: v for k, v in card3.soil.items()
+                                                                          if k != "shear_modulus"}
+    card2 = load_card(ROOT / "soils" / "karlsruhe-fine-sand-2d.toml")
+    case2, why2 = interface_case(card2)
+    assert case2["device"] == "periodic" and case2["soil"] == str(card2.path) and "group1_kfs_2d.toml" in why2
+    bare, why3 = interface_case(load_card(_card(tmp_path)))
+    assert bare == {"soil": str(tmp_path / "sand.toml"), **protocol_for(0.00014, PROTOCOL_3D)} and "3D" in why3
+    other = _card(tmp_path, f'\n[criterion]\ncampaign = "{ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"}"\n')
+    with pytest.raises(InputError, match="not this card") as e:
+        interface_case(load_card(other))
+    assert "[criterion] campaign" in str(e.value)
+
+    # the generated campaign plans the 3D cell's interface case and its soil test: the very cases
+    # (the same ids) Group 1 ran, whose committed runs the fit stands on
+    path = write_campaign(tmp_path / "sim" / "simulate.toml", name="predict", sweep={"seed": [1]}, executor="local",
+                          case={**case, "profile": {"kind": "sawtooth", "rt": 1.0, "sw": 2.0, "sr": 0.0},
+                                "normal_stress": 1e5, "friction_ps": 0.5}, description="test")
+    capsys.readouterr()
+    assert main(["run", str(path), "--dry-run", "--plain"]) == 0
+    out = capsys.readouterr().out
+    assert "interface-periodic3d-sawtooth-rt1-" in out and "box-periodic3d-box" in out, out
+    import pandas as pd
+
+    g1 = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "group1" / "summaries.csv", dtype=str)
+    same = g1[g1["label"].isin(["box-periodic3d-box-mu0.9-user-prep0.387-s1",
+                                "interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.5-user-prep0.387-s1"])]
+    assert len(same) == 2 and all(cid in out for cid in same["case_id"]), out

@@ -518,7 +518,8 @@ def _add_report(sub) -> None:
                    "which the card names in [criterion] fit, with its tan φ and D50")
     p.add_argument("--simulate", action="store_true",
                    help="with --soil: run the DEM on the profile with the card's grains instead (a generated "
-                   "campaign in --runs, resumable; the campaigns' protocol in the card's D50 units)")
+                   "campaign in --runs, resumable; in the cell of the campaign the card names in [criterion] "
+                   "campaign, else the campaigns' protocol in the card's D50 units, quasi-2D or 3D as the card)")
     p.add_argument("--seeds", type=int, default=3, help="--simulate: packing seeds 1…N (default 3)")
     p.add_argument("--normal-stress", type=float, default=100e3, metavar="PA",
                    help="--simulate: normal stress [Pa] (default 100e3)")
@@ -730,8 +731,8 @@ def _cmd_predict_dem(args) -> int:
     if args.json:
         _print_json(out)
         return 0
-    print(f"DEM on {args.profile} with {card.name} (μs {args.friction:g}, {args.normal_stress / 1e3:g} kPa, "
-          f"{out['seeds']} seeds): tan δ {out['tan_delta']:.3f} [{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
+    print(f"DEM on {args.profile} with {card.name} in {out['cell']} (μs {args.friction:g}, "
+          f"{args.normal_stress / 1e3:g} kPa, {out['seeds']} seeds): tan δ {out['tan_delta']:.3f} [{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
           f"δ {out['delta_deg']:.2f}° [{out['delta_deg_lo']:.2f}, {out['delta_deg_hi']:.2f}], "
           f"E {out['E']:.3f} [{out['E_lo']:.3f}, {out['E_hi']:.3f}], tan φ {out['tan_phi']:.3f}")
     return 0

@@ -4,9 +4,11 @@ through the campaign machinery (a generated campaign file, resumable, local or S
 One group per row: the rebuilt surface (its geometry in D50 units of the laboratory's soil, so the
 card's grains meet teeth of the same relative size), the row's normal stress and particle–surface
 friction, packing seeds 1…N, and the paired soil test of the card's grains at that stress. The
-interface protocol is the campaigns' (PROTOCOL: the 40 × 25 D50 periodic cell at 0.02 m/s over 6 mm of
-0.7 mm grains, i.e. 8.6 D50, `protocol_for` the card's D50; docs/convergence.md), not the element
-test's cell.
+interface cell (`interface_case`) is the one the card's criterion stands on: the [case] of the
+campaign its `[criterion] campaign` names; without one, the campaigns' protocol in the card's D50
+units (PROTOCOL: the 40 × 25 D50 periodic cell at 0.02 m/s over 6 mm of 0.7 mm grains, i.e. 8.6 D50;
+docs/convergence.md), in the quasi-2D device for a quasi-2D card and in the chosen 3D cell
+(PROTOCOL_3D, 30 × 15 × 10 D50; docs/3d.md) for a 3D one. Never the element test's cell.
 """
 
 from __future__ import annotations
@@ -25,15 +27,74 @@ PROTOCOL = {"test": "interface", "device": "periodic", "shear_velocity": 0.02, "
 PROTOCOL_D50 = 0.0007      # [m] the grains PROTOCOL's lengths (6 mm of shear, snapshots every 0.5 mm) are for
 
 
-def protocol_for(d50: float) -> dict:
+#: a 3D card's interface cell without a campaign of its own: the cell study's choice (docs/3d.md:
+#: 30 × 15 × 10 D50, periodic in x and y), the rest of PROTOCOL as it is
+PROTOCOL_3D = PROTOCOL | {"device": "periodic3d", "box_length_d50": 30.0, "box_height_d50": 15.0, "box_depth_d50": 10.0}
+#: what a row or a profile sets, never taken from a campaign's [case]
+CASE_OWN = ("profile", "friction_ps", "normal_stress", "seed")
+
+
+def protocol_for(d50: float, protocol: dict = PROTOCOL) -> dict:
     """PROTOCOL for grains of median diameter `d50` [m]: the shear and the snapshot spacing in the same
     D50 units (8.6 D50 and 0.71 D50), the speed as it is (the inertial number depends on the speed and
     the cell's height in D50, not on D50). A 0.14 mm sand sheared 6 mm would go 43 D50, five times
     the study's shear and its cost."""
     k = float(d50) / PROTOCOL_D50
     # rounded so that the study's own grains keep the study's numbers and a case id does not carry float noise
-    return PROTOCOL | {"shear_distance": round(PROTOCOL["shear_distance"] * k, 12),
-                       "snapshot_every": round(PROTOCOL["snapshot_every"] * k, 12)}
+    return protocol | {"shear_distance": round(protocol["shear_distance"] * k, 12),
+                       "snapshot_every": round(protocol["snapshot_every"] * k, 12)}
+
+
+def interface_case(card, protocol: dict | None = None) -> tuple[dict, str]:
+    """The [case] fields a card's interface cases run with, the surface, stress, friction and seed
+    aside (CASE_OWN), and where they come from (a sentence).
+
+    - `protocol` given: the card's grains (`soil`) in it;
+    - the card's `[criterion] campaign` (relative to the card): that campaign's [case], the cell,
+      device, stiffness and shear its fitted criterion stands on, so that the DEM answers the same
+      experiment as the fit (a stiffness set there, as the 3D Group 1's 50 MPa, stays). Its grains
+      must be the card's: `soil` naming the card, or the card's own fields;
+    - else PROTOCOL in the card's D50 units: the quasi-2D device for a quasi-2D card (its [cell] a
+      biaxial test), PROTOCOL_3D for a 3D card, whose spheres were calibrated as spheres.
+    An InputError names the card's field and the fix when the campaign cannot be used."""
+    import tomllib
+
+    from interphase.soil import load_card
+
+    d50 = float(card.soil["d50"])
+    if protocol is not None:
+        return {"soil": str(card.path), **protocol}, "the given protocol"
+    ref = card.extra.get("criterion", {}).get("campaign")
+    where = f"{card.path}: [criterion] campaign"
+    if ref is None:
+        if card.cell["test"] == "biaxial":
+            return ({"soil": str(card.path), **protocol_for(d50)},
+                    "the campaigns' quasi-2D cell (40 × 25 D50; the card names no campaign)")
+        return ({"soil": str(card.path), **protocol_for(d50, PROTOCOL_3D)},
+                "the chosen 3D cell (30 × 15 × 10 D50, the card's stiffness; the card names no campaign)")
+    path = Path(ref) if Path(ref).is_absolute() else (card.path.parent / str(ref)).resolve()
+    try:
+        case = dict(tomllib.loads(path.read_text()).get("case", {}))
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(f"cannot read the campaign {path}: {exc}", where=where,
+                         fix="the path is relative to the card: the campaign its criterion was fitted on") from None
+    if not case:
+        raise InputError(f"the campaign {path} has no [case] table", where=where,
+                         fix="name the campaign file of the card's Group 1 (its [case] holds the cell)")
+    case = {k: v for k, v in case.items() if k not in CASE_OWN}
+    if "soil" in case:
+        soil = Path(case["soil"]) if Path(case["soil"]).is_absolute() else (path.parent / case["soil"]).resolve()
+        if load_card(soil).path != card.path:
+            raise InputError(f"the campaign {path} shears the grains of {soil}, not this card's", where=where,
+                             fix="name the campaign run on this card")
+        case["soil"] = str(card.path)
+    else:
+        other = sorted(k for k, v in card.soil.items() if k != "shear_modulus" and case.get(k) != v)
+        if other:
+            raise InputError(f"the campaign {path} gives other grains than the card ({other[0]!r})", where=where,
+                             fix="name the campaign run on this card's grains")
+    g = case.get("shear_modulus", card.soil.get("shear_modulus"))
+    return case, f"the [case] of {path} ({case.get('device', 'periodic')}, G {float(g) / 1e6:g} MPa)"
 
 
 def profile_spec(row, d50: float, folder: Path) -> dict:
@@ -68,8 +129,7 @@ def simulate(table, card, seeds, *, output: Path, executor: str | None = None, j
     output = Path(output)
     from interphase.analysis.validation import row_friction
 
-    case = {"soil": str(Path(card.path).resolve()),
-            **(protocol_for(float(card.soil["d50"])) if protocol is None else protocol)}
+    case, _ = interface_case(card, protocol)
     groups = []
     for _, r in table.rows.iterrows():
         groups.append({"name": f"row{int(r['row'])}",
@@ -105,8 +165,9 @@ def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal
     """`campaign predict … --soil CARD --simulate`: the DEM on one surface profile (x, z [m], as
     measured: the teeth keep their physical size against the card's grains) with the card's grains
     at `normal_stress` [Pa] and particle–surface `friction`, packing seeds `seeds`, with the card's
-    soil test; a generated campaign in `output` (resumable, local or SLURM). Returns tan δ, E and δ
-    at the seed ensemble's peak with their 95 % intervals, tan φ, the seeds and the campaign file."""
+    soil test, in the card's interface cell (`interface_case`); a generated campaign in `output`
+    (resumable, local or SLURM). Returns tan δ, E and δ at the seed ensemble's peak with their 95 %
+    intervals, tan φ, the seeds, the campaign file and the cell (where it came from)."""
     from interphase.campaign.element import run_cases
     from interphase.campaign.results import campaign_ensembles
 
@@ -114,9 +175,8 @@ def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal
     prof = output / "profile.csv"
     output.mkdir(parents=True, exist_ok=True)
     pd.DataFrame({"x": np.asarray(x, float), "z": np.asarray(z, float)}).to_csv(prof, index=False, header=False)
-    case = {"soil": str(Path(card.path).resolve()),
-            **(protocol_for(float(card.soil["d50"])) if protocol is None else protocol),
-            "profile": {"kind": "file", "path": str(prof.resolve()), "units": "m"},
+    base, cell = interface_case(card, protocol)
+    case = {**base, "profile": {"kind": "file", "path": str(prof.resolve()), "units": "m"},
             "normal_stress": float(normal_stress), "friction_ps": float(friction)}
     path = write_campaign(output / "simulate.toml", name="predict", case=case, sweep={"seed": [int(s) for s in seeds]},
                           executor=executor or "local", description=f"a profile on the soil card {card.path}")
@@ -128,7 +188,7 @@ def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal
                          fix="see `campaign status` of the campaign there; --rerun-failed runs failed ones again")
     r = ens.iloc[0]
     deg = lambda t: float(np.degrees(np.arctan(float(t))))
-    return {"campaign": str(path), "seeds": int(r["seeds"]), "tan_phi": float(r["tan_phi"]),
+    return {"campaign": str(path), "cell": cell, "seeds": int(r["seeds"]), "tan_phi": float(r["tan_phi"]),
             "tan_delta": float(r["tan_delta"]), "tan_delta_lo": float(r["tan_delta_lo"]),
             "tan_delta_hi": float(r["tan_delta_hi"]), "E": float(r["E"]), "E_lo": float(r["E_lo"]),
             "E_hi": float(r["E_hi"]), "delta_deg": deg(r["tan_delta"]), "delta_deg_lo": deg(r["tan_delta_lo"]),
