@@ -24,10 +24,10 @@ from interphase.analysis.ensemble import physical_ids, values_interval
 #: (column, what it holds) of `soil_test_readings`, each with `_lo`/`_hi` (95 % over the seeds)
 READINGS = {
     "phi_plane_deg": "atan of the box's peak τ/σ on its plane (History forces)",
-    "phi_mob_deg": "asin(q/p) of the specimen's average stress at the peak snapshot",
+    "phi_mob_deg": "of the specimen's average stress at the peak snapshot (its x–z part in 3D)",
     "principal_deg": "major principal stress direction at the peak snapshot, from the vertical",
     "phi_mohr_plane_deg": "atan of Mohr's τ/σ on the horizontal plane at that direction",
-    "phi_sin_deg": "atan(sin φ_mob): the plane's reading at α = 45°",
+    "phi_sin_deg": "the plane's reading at σ1 45° from the vertical",
 }
 
 
