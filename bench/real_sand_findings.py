@@ -3,7 +3,7 @@
     PYTHONPATH=src python bench/real_sand_findings.py
 
 Reads docs/reproduction/real_sand/2d/ (campaigns/real_sand/group1_kfs_2d.toml, the quasi-2D card) and
-docs/reproduction/real_sand/3d/group1/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
+docs/reproduction/real_sand/3d/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
 D50 cell): summaries.csv and curves.parquet, read as the report reads runs (analysis.ensemble_table:
 each case's leave-one-out peak over its seeds, E over the paired soil test, 95 % intervals).
 Prints Markdown for docs/reproduction.md:
@@ -44,7 +44,7 @@ from interphase.campaign.results import CommittedCurves  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CELLS = {"quasi-2D": ROOT / "docs" / "reproduction" / "real_sand" / "2d",
-         "3D": ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "group1"}
+         "3D": ROOT / "docs" / "reproduction" / "real_sand" / "3d"}
 SATURATED_RT = 1.0        # the teeth whose E item 3 of the issue reads as the plateau
 BIAXIAL_2D = ROOT / "docs" / "soils" / "karlsruhe-fine-sand-2d" / "verification_tmd17_6seeds.csv"
 

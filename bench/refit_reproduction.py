@@ -6,7 +6,7 @@ the criterion's check against every case, and the findings tables.
         [--out DIR] [--boot N] [--figures] [--commit]
 
 --study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/;
---kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/group1/.
+--kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/.
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
 repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
 (and, with --figures, its figures to docs/reproduction/figures/); any other set's correlations.csv,
@@ -34,7 +34,7 @@ REPRO = ROOT / "docs" / "reproduction"
 SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
         "kfs2d": (REPRO / "real_sand" / "2d", ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"),
-        "kfs3d": (REPRO / "real_sand" / "3d" / "group1", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
+        "kfs3d": (REPRO / "real_sand" / "3d", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
 
 
 def refit(name: str, out: Path, n_boot: int, figures: bool):

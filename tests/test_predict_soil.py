@@ -132,7 +132,7 @@ def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
     assert "interface-periodic3d-sawtooth-rt1-" in out and "box-periodic3d-box" in out, out
     import pandas as pd
 
-    g1 = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "group1" / "summaries.csv", dtype=str)
+    g1 = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "summaries.csv", dtype=str)
     same = g1[g1["label"].isin(["box-periodic3d-box-mu0.9-user-prep0.387-s1",
                                 "interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.5-user-prep0.387-s1"])]
     assert len(same) == 2 and all(cid in out for cid in same["case_id"]), out
