@@ -176,6 +176,32 @@ def test_sigterm_to_the_campaign_alone_starts_no_case_after_it(campaign):
     assert not any((f / "DONE").exists() for f in _folders(out) if folder_status(f) == "interrupted")
 
 
+def test_stop_lets_the_running_case_finish_and_starts_no_other(campaign, capsys):
+    """`campaign stop`: the case running when it is asked runs to its end (DONE), no case after it
+    runs to its end (the one the pool had already handed a worker is stopped as it starts), the run
+    ends with 130 and says so, and the STOP file is gone, so the same command goes on."""
+    out = campaign.parent / "out"
+    assert main(["stop", str(campaign)]) == 2                  # no runs folder yet
+    assert "does not exist" in capsys.readouterr().err
+    proc = _start(campaign, "--jobs", "1")
+    _wait_for(lambda: any(stale_engine_pids(f) for f in _folders(out)), 120, "a running engine")
+    assert main(["stop", str(campaign)]) == 0
+    asked = time.time()
+    running = [f for f in _folders(out) if not (f / "DONE").exists()]
+    text, _ = proc.communicate(timeout=180)
+    assert proc.returncode == 130 and "stopped as asked" in text, text
+    _no_engine_left(out)
+    assert not (out / "STOP").exists()
+    done = [f for f in _folders(out) if (f / "DONE").exists()]
+    assert 1 <= len(done) < 6, text
+    assert any(f in done for f in running), text             # the running case finished, not stopped
+    assert all(folder_status(f) in ("done", "interrupted") for f in _folders(out)), text
+    late = [f for f in done if json.loads((f / "case.json").read_text()).get("started", 0) > asked + 1]
+    assert not late, text                                     # nothing started after the stop ran to its end
+    assert main(["stop", str(campaign)]) == 2                  # nothing runs now
+    assert "no `campaign run` is running" in capsys.readouterr().err
+
+
 def test_second_run_is_refused_while_the_first_holds_the_lock(campaign, capsys):
     out = campaign.parent / "out"
     with CampaignStore(out, create=True) as store, store.lock():

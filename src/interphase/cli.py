@@ -318,6 +318,12 @@ def _add_campaign(sub) -> None:
                         "a campaign goes on on another machine without rerunning them (no dumps come back)")
     p.set_defaults(func=_cmd_campaign_run)
 
+    p = sub.add_parser("stop", help="ask a running `campaign run` (local) to start no new case and end when its "
+                       "running cases have finished: nothing half-run is lost")
+    p.add_argument("campaign", help="campaign file (TOML)")
+    p.add_argument("--runs", default=None, metavar="DIR", help=RUNS_HELP)
+    p.set_defaults(func=_cmd_campaign_stop)
+
     p = sub.add_parser("status", help="state of every case of a campaign, with failure causes")
     p.add_argument("campaign", help="campaign file (TOML)")
     p.add_argument("--engine", default=None, help="the engine the campaign ran with, if not the file's")
@@ -350,6 +356,26 @@ def _cmd_campaign_run(args) -> int:
                      "planned": report.planned, "counts": counts, "ran": report.ran,
                      "interrupted": report.interrupted, "exit_code": code})
     return code
+
+
+def _cmd_campaign_stop(args) -> int:
+    from interphase.campaign import store as st
+    from interphase.campaign.executors import STOP_FILE
+    from interphase.campaign.schema import load_campaign
+    import time
+
+    campaign = load_campaign(args.campaign, output=args.runs)
+    if not campaign.output.is_dir():
+        raise InputError(f"the runs folder {campaign.output} does not exist ({campaign.output_from})",
+                         where=args.campaign, fix="nothing runs there; give --runs DIR if it ran elsewhere")
+    with st.CampaignStore(campaign.output) as store:
+        if not store.run_active():
+            raise InputError(f"no `campaign run` is running in {campaign.output}", where=args.campaign,
+                             fix="nothing to stop (`campaign status` shows its cases)")
+    (campaign.output / STOP_FILE).write_text(f"asked by `campaign stop` at {time.strftime('%Y-%m-%d %H:%M:%S')}\n")
+    print(f"campaign {campaign.name}: wrote {campaign.output / STOP_FILE}: a local run starts no new case and ends "
+          "when its running cases have finished (Ctrl-C or SIGTERM stops them now); SLURM runs: scancel its jobs")
+    return 0
 
 
 def _cmd_campaign_status(args) -> int:

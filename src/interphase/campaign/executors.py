@@ -176,11 +176,21 @@ def lost_result(task: Task, exc: BaseException, pid: int | None) -> dict:
     return {"case_id": task.case_id, "status": "interrupted", "cause": cause, "message": message}
 
 
+class StopAsked(Interrupted):
+    """The campaign's STOP file was found: the cases running then finished, no other started."""
+
+
+#: the file in a campaign's runs folder that asks its running `campaign run` to start no new case and
+#: end when its running cases have finished (`campaign stop`); removed once honoured
+STOP_FILE = "STOP"
+
+
 class LocalExecutor:
     name = "local"
 
-    def __init__(self, jobs: int = 0):
+    def __init__(self, jobs: int = 0, stop_file: Path | None = None):
         self.jobs = jobs if jobs and jobs > 0 else (os.cpu_count() or 1)
+        self.stop_file = stop_file
 
     def run(self, tasks: list[Task], on_event: OnEvent, grace: float = 30.0) -> None:
         """Run `tasks` in a pool of `jobs` workers. A worker that dies (SIGKILL, the out-of-memory
@@ -214,10 +224,21 @@ class LocalExecutor:
                     rnd.drain()
                     for fut in done:
                         rnd.finish(fut)
+                    if rnd.keep is None and self.stop_file is not None and self.stop_file.exists():
+                        rnd.keep = set(rnd.workers)       # these finish; nothing else starts
+                        for fut in pending:
+                            fut.cancel()
+                        on_event("note", "", {"message": f"{self.stop_file} found: the {len(rnd.keep)} running "
+                                              "case(s) finish, no other starts"})
+                    if rnd.keep is not None:
+                        rnd.stop_started(spare=rnd.keep)
             except (KeyboardInterrupt, Interrupted):
                 rnd.stop(pending, grace)
                 pool.shutdown(wait=False, cancel_futures=True)
                 raise
+        if rnd.keep is not None:
+            self.stop_file.unlink(missing_ok=True)
+            raise StopAsked(f"{self.stop_file}")
         return rnd.again
 
 
@@ -232,6 +253,7 @@ class _PoolRound:
         self.workers: dict[str, int] = {}   # case_id → pid of the worker running it
         self.again: list[Task] = []
         self.signalled: set[str] = set()
+        self.keep: set[str] | None = None     # after a STOP: the cases that were running then
 
     def drain(self) -> None:
         """Pass on the workers' queued events, noting which worker runs which case."""
@@ -248,6 +270,9 @@ class _PoolRound:
         from concurrent.futures.process import BrokenProcessPool
 
         t = self.futures[fut]
+        if fut.cancelled():          # never started (a STOP): it stays pending
+            self.on_event("finished", t.case_id, {"case_id": t.case_id, "status": "pending", "skipped": True})
+            return
         try:
             res = fut.result()
         except (KeyboardInterrupt, Interrupted):
@@ -263,13 +288,13 @@ class _PoolRound:
         self.workers.pop(t.case_id, None)
         self.on_event("finished", t.case_id, res)
 
-    def stop_started(self) -> None:
-        """SIGINT to every worker running a case, once each."""
+    def stop_started(self, spare: set[str] = frozenset()) -> None:
+        """SIGINT to every worker running a case but those in `spare`, once each."""
         # the pool hands a worker its next task before the parent can cancel it (a queued call), so
         # a case may start after the interruption: stop it as well
         self.drain()
         for cid, pid in list(self.workers.items()):
-            if cid not in self.signalled:
+            if cid not in self.signalled and cid not in spare:
                 self.signalled.add(cid)
                 try:
                     os.kill(pid, signal.SIGINT)

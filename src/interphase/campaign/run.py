@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from interphase.campaign import store as st
-from interphase.campaign.executors import LocalExecutor, SlurmExecutor, Task
+from interphase.campaign.executors import STOP_FILE, LocalExecutor, SlurmExecutor, StopAsked, Task
 from interphase.campaign.plan import PlannedCase, estimate_seconds, plan, time_limit_minutes
 from interphase.campaign.progress import Progress
 from interphase.campaign.runner import Interrupted
@@ -252,6 +252,10 @@ def run_campaign(path, *, engines=None, executor: str | None = None, jobs: int |
 
     store = st.CampaignStore(campaign.output, create=True)
     with store, store.lock("campaign run"):
+        if (campaign.output / STOP_FILE).exists():      # it asked a run that has ended; this one goes on
+            (campaign.output / STOP_FILE).unlink()
+            print(f"campaign {campaign.name}: removed {campaign.output / STOP_FILE}, left from a run that had "
+                  "ended", file=stream, flush=True)
         if restore is not None:
             from interphase.campaign.restore import describe, restore_runs
 
@@ -312,7 +316,7 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
         store.set_status(p.case_id, "queued")
     slots = _slots(campaign, executor, jobs)
     if executor == "local":
-        ex = LocalExecutor(slots)
+        ex = LocalExecutor(slots, stop_file=campaign.output / STOP_FILE)
     else:
         ex = SlurmExecutor(campaign.output, partition=campaign.execution.partition, max_concurrent=slots,
                            job_name=f"interphase-{campaign.name}",
@@ -360,6 +364,10 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
                 ready = [t for t in stage if t.case_id not in waiting]
                 if ready:
                     ex.run(ready, on_event)
+    except StopAsked as exc:
+        report.interrupted = True
+        print(f"campaign {campaign.name}: stopped as asked ({exc.reason}): the cases running then finished, "
+              "no other started; run the same command again to go on.", file=stream, flush=True)
     except DiskFull as exc:
         report.interrupted, report.stopped = True, exc.reason
         print(f"campaign {campaign.name}: stopped: {exc.reason}. Running cases were stopped and recorded, "
