@@ -14,7 +14,7 @@ import pytest
 import interphase as ip
 
 ROOT = Path(__file__).resolve().parents[1]
-API = ("load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict")
+API = ("load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "predict_dem")
 
 
 def test_help_shows_the_api():

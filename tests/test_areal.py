@@ -183,4 +183,4 @@ def test_predict_reads_an_areal_scan_along_the_axis_it_is_sheared(capsys):
     card = Path(__file__).parents[1] / "soils" / "karlsruhe-fine-sand-2d.toml"
     assert main(["predict", str(FRT1), "--friction", "0.2", "--soil", str(card), "--simulate"]) == 2
     err = capsys.readouterr().err                     # the quasi-2D DEM shears one line: say how to give one
-    assert "one line" in err and 'line = "1/3"' in err and "drop --simulate" in err
+    assert "one line" in err and 'line = "1/3"' in err and "without --simulate" in err

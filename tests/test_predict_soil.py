@@ -136,3 +136,29 @@ def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
     same = g1[g1["label"].isin(["box-periodic3d-box-mu0.9-user-prep0.387-s1",
                                 "interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.5-user-prep0.387-s1"])]
     assert len(same) == 2 and all(cid in out for cid in same["case_id"]), out
+
+
+def test_the_api_answers_as_the_command(tmp_path, capsys):
+    """ip.predict(…, soil=CARD) gives the command's δ and fit; ip.predict_dem refuses what the
+    command refuses (an areal scan, a D50 that is not the card's), naming the argument."""
+    import interphase as ip
+
+    card = ROOT / "soils" / "karlsruhe-fine-sand-2d.toml"
+    saw = tmp_path / "saw.txt"
+    assert main(["profile", "sawtooth", "--rt", "0.5", "--sw", "2", "--d50", "0.14", "--length", "6",
+                 "-o", str(saw)]) == 0
+    capsys.readouterr()
+    assert main(["predict", str(saw), "--friction", "0.2", "--soil", str(card), "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    api = ip.predict(saw, friction=0.2, soil=card)
+    for key in ("theta_a_deg", "efficiency", "delta_deg", "delta_deg_lo", "delta_deg_hi", "fit", "soil", "d50_mm"):
+        assert api[key] == cli[key], key
+    with pytest.raises(ip.InputError, match="not both"):
+        ip.predict(saw, friction=0.2, soil=card, fit=str(FIT))
+    with pytest.raises(ip.InputError, match="d50_mm"):
+        ip.predict_dem(saw, 0.2, card, d50_mm=0.7, runs=tmp_path / "runs")
+    with pytest.raises(ip.InputError, match="one line"):
+        ip.predict_dem(ROOT / "campaigns" / "profiles" / "frt-1.frt", 0.2, card, runs=tmp_path / "runs")
+    with pytest.raises(ip.InputError, match="seeds"):
+        ip.predict_dem(saw, 0.2, card, seeds=2, runs=tmp_path / "runs")
+    assert not (tmp_path / "runs").exists()

@@ -10,6 +10,8 @@ The Python API (interphase.api; the `campaign` command does the same):
     ip.summaries(c)                                 # DataFrame: one row per finished run
     ip.ensembles(c)                                 # DataFrame: one row per physical case (seeds pooled)
     ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # θa → θr → E → tan δ
+    ip.predict("profile.csv", friction=0.2, soil="soils/NAME.toml")   # on the card's own fit
+    ip.predict_dem("profile.csv", 0.2, "soils/NAME.toml")  # the DEM on the profile instead (runs)
     ip.element("soils/NAME.toml", 100e3, seeds=3)   # the soil's φ_peak, φ_cs, ψ_max (docs/soils.md)
     ip.calibrate("TARGET.toml")                     # grain parameters from a laboratory soil → a card
     ip.validate("lab/FILE.csv", soil="soils/NAME.toml")   # the criterion against laboratory tests
@@ -22,11 +24,12 @@ toward −x, the shear-resisting side); public outputs name which reading they c
 Bad input raises interphase.errors.InputError (the file, the field and the fix).
 """
 
-from interphase.api import (calibrate, element, ensembles, lab_record, load_campaign, plan, predict, run, status,
-                            summaries, validate)
+from interphase.api import (calibrate, element, ensembles, lab_record, load_campaign, plan, predict, predict_dem,
+                            run, status, summaries, validate)
 from interphase.errors import InputError
 from interphase.version import __version__
 
-__all__ = ["load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "element", "calibrate",
+__all__ = ["load_campaign", "plan", "run", "status", "summaries", "ensembles", "predict", "predict_dem", "element",
+           "calibrate",
            "validate", "lab_record", "InputError",
            "__version__"]

@@ -8,6 +8,8 @@
     df = ip.summaries(c)                                   # DataFrame, one row per finished run
     ens = ip.ensembles(c)                                  # DataFrame, one row per physical case
     p = ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # dict: θa → θr → E → tan δ
+    p = ip.predict("profile.csv", friction=0.2, soil="soils/karlsruhe-fine-sand-2d.toml")  # the card's own fit
+    d = ip.predict_dem("profile.csv", 0.2, "soils/karlsruhe-fine-sand-2d.toml")  # the DEM instead (runs)
     r = ip.lab_record("lab/soils/karlsruhe-fine-sand/drained-triaxial/TMD11.dat")   # dict: φ_peak, ψ_max, …
 
 Every function takes a campaign file's path or a loaded `Campaign`, and `runs=` where the runs
@@ -113,14 +115,17 @@ def ensembles(campaign, *, runs: PathLike | None = None):
     return campaign_ensembles(c.path, c.output)
 
 
-def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | None = None,
-            tan_phi: float | None = None, units: str | None = None, axis: str = "x") -> dict:
+def predict(profile: PathLike, d50_mm: float | None = None, friction: float | None = None, *,
+            fit: str | None = None, soil: PathLike | None = None, tan_phi: float | None = None,
+            units: str | None = None, axis: str = "x") -> dict:
     """The criterion chain for a surface profile or areal scan (as `campaign predict --json`): θa →
     θr → E → tan δ. `d50_mm` [mm], `friction` = tan φμ particle–surface [-]; `fit`: a campaign file,
-    a criterion.json or 'study' (default: the reproduction's fits shipped with the package);
-    `tan_phi` of your soil (default: the fits' simulated soil); `axis`: an areal scan's shear
+    a criterion.json or 'study' (default: the reproduction's fits shipped with the package); `soil`:
+    a soil card instead, whose own fit (`[criterion] fit`) and D50 are used (`d50_mm` may be left
+    out); `tan_phi` of your soil (default: the fit's simulated soil); `axis`: an areal scan's shear
     direction (+x or +y, every grid line along it pooled). Returns a dict: theta_a_deg,
-    theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes."""
+    theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes, and the fit
+    and soil used."""
     import math
 
     from interphase.analysis.criterion import predict_measured
@@ -128,13 +133,61 @@ def predict(profile: PathLike, d50_mm: float, friction: float, *, fit: str | Non
     from interphase.report.build import criterion_model
     from interphase.surface.readers import read_scan
 
+    if soil is not None:
+        from interphase.soil import card_d50_mm, criterion_fit, load_card
+
+        if fit is not None:
+            raise InputError("a soil card names its own fit", where="fit", fix="give soil or fit, not both")
+        card = load_card(soil)
+        fit, soil = str(criterion_fit(card)), str(card.path)
+        d50_mm = card_d50_mm(card, d50_mm, "its fit is of that soil", where="d50_mm")
     if not (isinstance(d50_mm, (int, float)) and math.isfinite(d50_mm) and d50_mm > 0):
-        raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm")
+        raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm",
+                         fix="give d50_mm, or soil= a card for its D50")
     if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
         raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
     model = criterion_model(friction, fit, tan_phi)
     res = predict_measured(model, read_scan(str(profile), units), d50_mm * 1e-3, friction, axis)
-    return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm}
+    p = res.prediction
+    return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm, "fit": str(fit) if fit else "reproduction",
+                            "fit_source": model.source, "soil": soil, "delta_deg": p.delta_deg,
+                            "delta_deg_lo": p.delta_interval_deg[0], "delta_deg_hi": p.delta_interval_deg[1]}
+
+
+def predict_dem(profile: PathLike, friction: float, soil: PathLike, *, seeds: int = 3,
+                normal_stress: float = 100e3, runs: PathLike | None = None, jobs: int | None = None,
+                units: str | None = None, d50_mm: float | None = None, stream=None) -> dict:
+    """The DEM instead of the criterion (as `campaign predict … --soil CARD --simulate --json`): the
+    profile as measured sheared with the card's grains at `normal_stress` [Pa] and particle–surface
+    `friction`, packing seeds 1…`seeds`, in the cell the card's criterion stands on
+    (campaign.validate.interface_case), with the card's soil test; a generated campaign in `runs`
+    (default runs/predict/<card>/<profile name> beside the card), resumable. Returns tan δ, E and δ
+    with their 95 % intervals, tan φ, the seeds, the cell and the campaign file. A line profile
+    only: an areal scan is refused (a campaign can take one line of it)."""
+    import sys
+
+    from interphase.campaign.folders import beside, given
+    from interphase.campaign.validate import check_dem_request, simulate_profile
+    from interphase.errors import InputError
+    from interphase.soil import card_d50_mm, load_card
+    from interphase.surface.readers import load_profile, read_scan
+
+    check_dem_request(friction, seeds, normal_stress)
+    card = load_card(soil)
+    card_d50_mm(card, d50_mm, "the DEM uses the card's grains", where="d50_mm")
+    if read_scan(str(profile), units).areal:
+        raise InputError("an areal scan: the DEM shears one line of it", where=str(profile),
+                         fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
+                             f"path = \"{profile}\", axis = \"x\", line = \"1/3\"}} (campaigns/study.toml's Group 5), "
+                             "or use the criterion (`campaign predict` without --simulate), which pools every line")
+    prof = load_profile(str(profile), units, None)
+    out_dir, runs_from = (given(runs, "--runs") if runs else
+                          beside(card.path, f"runs/predict/{card.name}/{Path(profile).stem}", "--runs"))
+    print(f"predict --simulate: runs folder {out_dir} ({runs_from})", file=stream or sys.stderr, flush=True)
+    out = simulate_profile(card, prof.x, prof.z, friction, range(1, seeds + 1), output=out_dir,
+                           normal_stress=normal_stress, jobs=jobs, stream=stream)
+    return out | {"profile": str(profile), "soil": str(card.path), "friction": friction,
+                  "normal_stress": normal_stress}
 
 
 def element(card: PathLike, normal_stress: float | list[float], seeds: int = 3, *, runs: PathLike | None = None,

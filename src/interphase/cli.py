@@ -680,85 +680,44 @@ def _cmd_report(args) -> int:
 
 
 def _soil_fit(args) -> tuple[str, str]:
-    """(criterion file, card path) of `predict --soil CARD`: the fit the card names in [criterion] fit
-    (a criterion.json of `campaign report` on the card's own interface campaign, relative to the card);
+    """(criterion file, card path) of `predict --soil CARD`: the fit the card names in [criterion] fit;
     --d50 defaults to the card's and may not contradict it."""
-    from pathlib import Path
-
-    from interphase.soil import load_card
+    from interphase.soil import card_d50_mm, criterion_fit, load_card
 
     if args.fit is not None:
         raise InputError("--soil names its own fit", where="--fit", fix="give --soil CARD or --fit FILE, not both")
     card = load_card(args.soil)
-    ref = card.extra.get("criterion", {}).get("fit")
-    if not isinstance(ref, str) or not ref:
-        raise InputError("the card names no criterion fitted on its soil", where=f"{card.path}: [criterion] fit",
-                         fix="run the soil's interface campaign (e.g. campaigns/real_sand/group1_kfs_3d.toml), "
-                             "`campaign report` it, and set [criterion] fit = \"…/criterion.json\" in the card; "
-                             "or predict with --fit")
-    path = Path(ref) if Path(ref).is_absolute() else (card.path.parent / ref).resolve()
-    if not path.exists():
-        raise InputError(f"the card's criterion file {path} does not exist", where=f"{card.path}: [criterion] fit",
-                         fix="the path is relative to the card; `campaign report` writes criterion.json")
-    args.d50 = _card_d50(card, args.d50, "its fit is of that soil")
+    path = criterion_fit(card)
+    args.d50 = card_d50_mm(card, args.d50, "its fit is of that soil")
     return str(path), str(card.path)
-
-
-def _card_d50(card, given_mm, why: str) -> float:
-    """The card's D50 [mm]; a --d50 more than 1 % off it is refused (`why`: what depends on it)."""
-    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
-    if given_mm is not None and abs(given_mm - d50_mm) > 0.01 * d50_mm:
-        raise InputError(f"--d50 {given_mm:g} mm is not the card's D50 ({d50_mm:g} mm): {why}", where="--d50",
-                         fix="drop --d50 (the card's is used), or give no --soil for another soil")
-    return d50_mm
 
 
 def _cmd_predict_dem(args) -> int:
     """`campaign predict PROFILE --friction MU --soil CARD --simulate`: the DEM instead of the fit."""
-    import math
     from pathlib import Path
 
-    from interphase.campaign.folders import beside, given
-    from interphase.campaign.validate import simulate_profile
-    from interphase.soil import load_card
+    from interphase.api import predict_dem
+    from interphase.campaign.validate import check_dem_request
+    from interphase.soil import card_d50_mm, load_card
 
     if args.soil is None:
         raise InputError("--simulate runs the DEM with a soil card's grains", where="--simulate",
                          fix="add --soil CARD (soils/NAME.toml)")
-    if not (math.isfinite(args.friction) and args.friction >= 0):
-        raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
-    if args.seeds < 3:
-        raise InputError(f"must be ≥ 3 (the fewest seeds a peak's interval is given for), got {args.seeds}",
-                         where="--seeds", fix="e.g. --seeds 3")
-    if not (math.isfinite(args.normal_stress) and args.normal_stress > 0):
-        raise InputError(f"must be > 0 Pa, got {args.normal_stress!r}", where="--normal-stress", fix="e.g. 100e3")
+    check_dem_request(args.friction, args.seeds, args.normal_stress, ("--friction", "--seeds", "--normal-stress"))
     for flag, value in (("--fit", args.fit), ("--tan-phi", args.tan_phi), ("--filter", args.filter)):
         if value is not None:
             raise InputError(f"{flag} is the criterion's; --simulate runs the DEM instead", where=flag,
                              fix=f"drop {flag}, or drop --simulate")
-    card = load_card(args.soil)
-    _card_d50(card, args.d50, "the DEM uses the card's grains")
-    from interphase.surface.readers import read_scan
-
-    if read_scan(args.profile, args.units).areal:
-        raise InputError("an areal scan: the DEM here shears one line of it", where="--simulate",
-                         fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
-                             f"path = \"{args.profile}\", axis = \"x\", line = \"1/3\"}} (campaigns/study.toml's Group 5), "
-                             "or drop --simulate: the criterion pools every line")
-    prof = _load_measured(args.profile, args.units)
-    runs, runs_from = (given(args.runs, "--runs") if args.runs else
-                       beside(card.path, f"runs/predict/{card.name}/{Path(args.profile).stem}", "--runs"))
+    card_d50_mm(load_card(args.soil), args.d50, "the DEM uses the card's grains")
     stream = sys.stderr if args.json else sys.stdout
-    print(f"predict --simulate: runs folder {runs} ({runs_from})", file=stream, flush=True)
-    out = simulate_profile(card, prof.x, prof.z, args.friction, range(1, args.seeds + 1), output=runs,
-                           normal_stress=args.normal_stress, jobs=args.jobs, stream=stream)
-    out |= {"profile": args.profile, "soil": str(card.path), "friction": args.friction,
-            "normal_stress": args.normal_stress}
+    out = predict_dem(args.profile, args.friction, args.soil, seeds=args.seeds, normal_stress=args.normal_stress,
+                      runs=args.runs, jobs=args.jobs, units=args.units, stream=stream)
     if args.json:
         _print_json(out)
         return 0
-    print(f"DEM on {args.profile} with {card.name} in {out['cell']} (μs {args.friction:g}, "
-          f"{args.normal_stress / 1e3:g} kPa, {out['seeds']} seeds): tan δ {out['tan_delta']:.3f} [{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
+    print(f"DEM on {args.profile} with {Path(out['soil']).stem} in {out['cell']} (μs {args.friction:g}, "
+          f"{args.normal_stress / 1e3:g} kPa, {out['seeds']} seeds): tan δ {out['tan_delta']:.3f} "
+          f"[{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
           f"δ {out['delta_deg']:.2f}° [{out['delta_deg_lo']:.2f}, {out['delta_deg_hi']:.2f}], "
           f"E {out['E']:.3f} [{out['E_lo']:.3f}, {out['E_hi']:.3f}], tan φ {out['tan_phi']:.3f}")
     return 0

@@ -250,3 +250,31 @@ def merge_soil(table: dict, card: SoilCard, where: str) -> dict:
                          fix=f"remove {both[0]!r} from the campaign (the card's soil is calibrated as a whole), "
                              "or drop `soil` and give every soil field yourself")
     return {**card.soil, **table}
+
+
+def criterion_fit(card: SoilCard) -> Path:
+    """The criterion.json the card names in `[criterion] fit` (relative to the card): the criterion
+    fitted on its own interface runs (`campaign predict --soil`). InputError, naming the card's
+    field and the fix, when it names none or the file is missing."""
+    ref = card.extra.get("criterion", {}).get("fit")
+    where = f"{card.path}: [criterion] fit"
+    if not isinstance(ref, str) or not ref:
+        raise InputError("the card names no criterion fitted on its soil", where=where,
+                         fix="run the soil's interface campaign (e.g. campaigns/real_sand/group1_kfs_3d.toml), "
+                             "`campaign report` it, and set [criterion] fit = \"…/criterion.json\" in the card; "
+                             "or predict with --fit")
+    path = Path(ref) if Path(ref).is_absolute() else (card.path.parent / ref).resolve()
+    if not path.exists():
+        raise InputError(f"the card's criterion file {path} does not exist", where=where,
+                         fix="the path is relative to the card; `campaign report` writes criterion.json")
+    return path
+
+
+def card_d50_mm(card: SoilCard, given_mm, why: str, where: str = "--d50") -> float:
+    """The card's D50 [mm]; a given one more than 1 % off it is refused (`why`: what depends on it;
+    `where`: the option or argument that gave it)."""
+    d50_mm = round(float(card.soil["d50"]) * 1e3, 9)
+    if given_mm is not None and abs(given_mm - d50_mm) > 0.01 * d50_mm:
+        raise InputError(f"{where} {given_mm:g} mm is not the card's D50 ({d50_mm:g} mm): {why}", where=where,
+                         fix=f"drop {where} (the card's is used), or give no soil card for another soil")
+    return d50_mm
