@@ -200,6 +200,9 @@ def test_stop_lets_the_running_case_finish_and_starts_no_other(campaign, capsys)
     assert not late, text                                     # nothing started after the stop ran to its end
     assert main(["stop", str(campaign)]) == 2                  # nothing runs now
     assert "no `campaign run` is running" in capsys.readouterr().err
+    # the dry run of what is left scales its time estimate by the runs that finished here
+    assert main(["run", str(campaign), "--dry-run"]) == 0
+    assert f"scaled by the {len(done)} finished run(s) here" in capsys.readouterr().out
 
 
 def test_second_run_is_refused_while_the_first_holds_the_lock(campaign, capsys):

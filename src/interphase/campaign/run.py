@@ -469,6 +469,7 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     print(f"campaign {campaign.name} (dry run, {executor}): {total} → {campaign.output}", file=stream, flush=True)
     tallies: dict[str, int] = {}
     n, seconds = 0, 0.0
+    measured = [0, 0.0, 0.0]        # finished runs read here: count, their engine seconds, their estimate
     for p in planned:
         folder = campaign.output / p.case_id
         state = st.folder_status(folder) if folder.exists() else "pending"
@@ -488,6 +489,12 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
         tallies[action] = tallies.get(action, 0) + 1
         n += 1
         seconds += estimate_seconds(p.case) if action == "run" or action.startswith("rerun") else 0.0
+        if action == "skip (done)" and measured[0] < CALIBRATION_RUNS:
+            took = (st.read_json(folder / st.CASE_JSON) or {}).get("timings", {}).get("execute")
+            if isinstance(took, (int, float)) and took > 0:
+                measured[0] += 1
+                measured[1] += took
+                measured[2] += estimate_seconds(p.case)
         if render and action == "run" and _start_status(p.case) == "done":
             if p.engine not in engines:
                 engines[p.engine] = p.engine_spec.build()
@@ -508,20 +515,30 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
         print(f"  … {n - SAMPLE} more (`--list` lists every case)", file=stream)
     report.planned = n
     print(f"{n} cases: " + ", ".join(f"{v} {k}" for k, v in sorted(tallies.items())), file=stream)
-    print(_time_estimate(seconds, _slots(campaign, executor, None)), file=stream)
+    print(_time_estimate(seconds, _slots(campaign, executor, None), measured), file=stream)
     print(f"decks rendered in {root}" if render else "no decks written (`--render` writes the decks of the cases "
           f"that would run, under {root})", file=stream, flush=True)
     return report
 
 
-def _time_estimate(seconds: float, slots: int) -> str:
+#: finished runs of the campaign a dry run reads to scale its estimate (their case.json)
+CALIBRATION_RUNS = 200
+
+
+def _time_estimate(seconds: float, slots: int, measured=(0, 0.0, 0.0)) -> str:
     """The dry run's estimate of what would run: engine time from plan.estimate_seconds (particle-steps
-    at 1.5e6 per second on one core, docs/engines.md: a rough figure, often within a factor of 2)."""
+    at 1.5e6 per second on one core, docs/engines.md: a rough figure, often within a factor of 2),
+    scaled by what the campaign's finished runs here took against their own estimate (`measured`:
+    count, engine seconds, estimated seconds), which carries this machine's speed and the sharing of
+    its cores by the runs' jobs."""
     if seconds <= 0:
         return "estimated time: nothing to run"
-    hours = seconds / 3600.0
-    return (f"estimated time: {hours:.2g} core-hour(s), about {hours / max(slots, 1):.2g} h on {slots} slot(s) "
-            "(particle-steps at 1.5e6/s per core: a rough figure)")
+    n, took, est = measured
+    scale = took / est if n and est > 0 else 1.0
+    hours = seconds * scale / 3600.0
+    how = (f"scaled by the {n} finished run(s) here, which took {scale:.2g}× their estimate" if n and est > 0 else
+           "particle-steps at 1.5e6/s per core: a rough figure")
+    return f"estimated time: {hours:.2g} slot-hour(s), about {hours / max(slots, 1):.2g} h on {slots} slot(s) ({how})"
 
 
 def campaign_status(path, *, output=None, engines=None):
