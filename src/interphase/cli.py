@@ -359,10 +359,11 @@ def _cmd_campaign_run(args) -> int:
 
 
 def _cmd_campaign_stop(args) -> int:
+    import time
+
     from interphase.campaign import store as st
     from interphase.campaign.executors import STOP_FILE
     from interphase.campaign.schema import load_campaign
-    import time
 
     campaign = load_campaign(args.campaign, output=args.runs)
     if not campaign.output.is_dir():
