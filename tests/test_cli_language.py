@@ -127,7 +127,7 @@ def test_sequential_dry_run_says_what_each_count_is_and_how_long(tmp_path, capsy
                  "--runs", str(tmp_path / "r")]) == 0
     out = capsys.readouterr().out
     assert "at most (sequential seeds: up to 24 per physical case)" in out
-    assert "this round 101 cases" in out and "estimated time:" in out and "core-hour" in out
+    assert "this round 101 cases" in out and "estimated time:" in out and "slot-hour" in out
 
 
 def test_architecture_names_every_module():
