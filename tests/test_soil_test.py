@@ -38,6 +38,8 @@ def test_readings_group_seeds_per_box_case():
               "qp_region": 0.5, "principal_stress_deg_region": 30.0}]
     r = soil_test_readings(pd.DataFrame(rows))
     assert list(r["case"]) == ["box-a"]          # b has no tensor at its peak, the interface is no soil test
+    two = soil_test_readings(pd.DataFrame([dict(x, engine=e) for x in rows[:3] for e in ("liggghts", "yade")]))
+    assert list(two["case"]) == ["box-a (liggghts)", "box-a (yade)"] and list(two["seeds"]) == [3, 3]
     assert r["seeds"].iloc[0] == 3
     assert abs(r["phi_mob_deg"].iloc[0] - math.degrees(math.asin(0.6))) < 1e-9
     assert abs(r["phi_sin_deg"].iloc[0] - math.degrees(math.atan(0.6))) < 1e-9

@@ -39,7 +39,8 @@ def plane_ratio(sin_phi, alpha_deg):
 
 
 def soil_test_readings(summaries: pd.DataFrame) -> pd.DataFrame:
-    """One row per physical box case of a summaries table: `case` (its name), `seeds`, and each of
+    """One row per physical box case and engine of a summaries table: `case` (its name, with the
+    engine when the table has several), `seeds`, and each of
     READINGS with its 95 % interval over the seeds (angles' t interval in [0°, 90°]). Runs without
     the region's tensor at their peak (`qp_region`, `principal_stress_deg_region`) are left out.
     Empty (with the columns) when the table has no box test."""
@@ -53,8 +54,9 @@ def soil_test_readings(summaries: pd.DataFrame) -> pd.DataFrame:
     box = box.dropna(subset=need)
     sphi = box["qp_region"].to_numpy(float)
     alpha = box["principal_stress_deg_region"].to_numpy(float)
+    engine = box["engine"].astype(str).to_numpy() if "engine" in box else ""
     per_run = pd.DataFrame({
-        "physical_id": physical_ids(box).to_numpy(),
+        "physical_id": physical_ids(box).to_numpy(), "engine": engine,
         "case": box["label"].str.replace(r"-s\d+$", "", regex=True).to_numpy() if "label" in box else "",
         "phi_plane_deg": np.degrees(np.arctan(box["peak_stress_ratio"].to_numpy(float))),
         "phi_mob_deg": np.degrees(np.arcsin(np.clip(sphi, -1, 1))),
@@ -63,8 +65,9 @@ def soil_test_readings(summaries: pd.DataFrame) -> pd.DataFrame:
         "phi_sin_deg": np.degrees(np.arctan(sphi)),
     })
     rows = []
-    for pid, g in per_run.groupby("physical_id", sort=False):
-        row = {"case": g["case"].iloc[0], "physical_id": pid, "seeds": len(g)}
+    for (pid, eng), g in per_run.groupby(["physical_id", "engine"], sort=False):   # engines never pooled
+        row = {"case": g["case"].iloc[0] + (f" ({eng})" if eng and per_run["engine"].nunique() > 1 else ""),
+               "physical_id": pid, "seeds": len(g)}
         for c in READINGS:
             v = g[c].to_numpy(float)
             row[c] = float(np.mean(v))
