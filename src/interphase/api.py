@@ -148,10 +148,8 @@ def predict(profile: PathLike, d50_mm: float | None = None, friction: float | No
         raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
     model = criterion_model(friction, fit, tan_phi)
     res = predict_measured(model, read_scan(str(profile), units), d50_mm * 1e-3, friction, axis)
-    p = res.prediction
     return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm, "fit": str(fit) if fit else "reproduction",
-                            "fit_source": model.source, "soil": soil, "delta_deg": p.delta_deg,
-                            "delta_deg_lo": p.delta_interval_deg[0], "delta_deg_hi": p.delta_interval_deg[1]}
+                            "fit_source": model.source, "soil": soil}
 
 
 def predict_dem(profile: PathLike, friction: float, soil: PathLike, *, seeds: int = 3,

@@ -755,9 +755,7 @@ def _cmd_predict(args) -> int:
                          "profile with the card's grains") from exc
     p, flat_spaced, why = res.prediction, res.flat_spaced, res.flat_spacing_reason
     out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "fit": str(fit) if fit else "reproduction",
-                           "fit_source": model.source, "soil": soil,
-                           "delta_deg": p.delta_deg, "delta_deg_lo": p.delta_interval_deg[0],
-                           "delta_deg_hi": p.delta_interval_deg[1]}
+                           "fit_source": model.source, "soil": soil}
     if args.json:
         _print_json(out)
         return 0

@@ -400,7 +400,11 @@ class ProfilePrediction:
     flat_spacing_reason: str
 
     def to_dict(self) -> dict:
+        """JSON data of `campaign predict` (and `ip.predict`): the prediction, δ's interval [°] also
+        as delta_deg_lo/_hi, and the profile quantities."""
+        lo, hi = self.prediction.delta_interval_deg
         return self.prediction.to_dict() | {
+            "delta_deg_lo": lo, "delta_deg_hi": hi,
             "flat_spaced": self.flat_spaced, "flat_spacing_reason": self.flat_spacing_reason,
             "theta_a_deg_92": self.theta_a_deg_92, "theta_a_deg_90": self.theta_a_deg_90,
             "mean_slope_deg": self.mean_slope_deg}
