@@ -232,6 +232,27 @@ def test_one_group_of_surfaces_holds_out_each_surface():
     assert np.sqrt((got ** 2).mean()) >= np.sqrt((ins ** 2).mean())
 
 
+def test_a_group_too_small_to_fit_without_the_rest_keeps_the_surface_fold():
+    """Group 1 with a few surfaces of another group beside it (here its lowest tooth relabelled): the
+    cases left without Group 1 cannot fit θa–θr per friction (3 a friction), so the check holds out
+    each surface, not each group; relabelling changes no fit, so every held-out error is the one-group
+    campaign's."""
+    from interphase.campaign.results import CommittedCurves
+
+    folder = ROOT / "docs" / "reproduction" / "real_sand" / "2d"
+    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "pair_id": str})
+    store = CommittedCurves(folder / "curves.parquet")
+    one = analyse(summ, campaign=None, store=store, n_boot=0).criterion_check
+    low = summ["test"].eq("interface") & summ["label"].str.contains("-rt0.1-")
+    assert low.sum() >= 9
+    two = analyse(summ.assign(group=summ["group"].where(~low, "measured")), campaign=None, store=store,
+                  n_boot=0).criterion_check
+    assert set(two["fold"]) == {"in-sample", "surface held out"}
+    key = ["fold", "physical_case"]
+    a, b = one.set_index(key)["error_deg"].sort_index(), two.set_index(key)["error_deg"].sort_index()
+    assert a.index.equals(b.index) and np.allclose(a, b, equal_nan=True)
+
+
 def test_the_criterion_is_checked_against_every_case_in_sample_and_group_held_out(synthetic_report):
     """Synthetic cases follow a known chain (θr(θa, μ) and E(θr) with small noise): predicted δ must
     sit within a couple of degrees of the measured one in sample and with each group's points left

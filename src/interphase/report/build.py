@@ -80,20 +80,24 @@ CHECK_COLUMNS = {"fold": "fold", "group": "group", "physical_case": "case", "fri
 
 def criterion_checks(chain: CriterionModel, points: pd.DataFrame) -> pd.DataFrame | None:
     """check_cases with the campaign's own fits (fold 'in-sample') and, when there are at least two
-    groups, with fits made WITHOUT each group on that group (fold 'group held out': the criterion
-    predicting surfaces it has not seen, as a user's new surface). A campaign of one group (a Group 1
-    design: one family of surfaces at several frictions) holds out each surface instead, all its
-    frictions together (fold 'surface held out', surfaces told apart by θa > 92°); the lowest and
-    highest θa are then outside the other surfaces' fits and stay unpredicted. The two-constant rule
-    is fitted on the same cases in each fold (fit_rule). None without θa–θr and E–θr fits."""
-    from interphase.analysis.correlations import fit_study
+    groups and the cases left without any one group still fit θa–θr per friction (MIN_POINTS at each
+    friction), with fits made WITHOUT each group on that group (fold 'group held out': the criterion
+    predicting surfaces it has not seen, as a user's new surface). Otherwise (one group, or a Group 1
+    design with a few measured or flat surfaces beside it) each surface is held out instead, all its
+    frictions together (fold 'surface held out', surfaces told apart by θa > 92°, a flat at 0); the
+    lowest and highest θa are then outside the other surfaces' fits and stay unpredicted. The two-constant rule is fitted on the same cases in each fold
+    (fit_rule). None without θa–θr and E–θr fits."""
+    from interphase.analysis.correlations import MIN_POINTS, fit_study
 
     if not chain.theta_r or chain.efficiency is None or points.empty:
         return None
     folds = [check_cases(chain, points, fit_rule(points)).assign(fold="in-sample")]
     groups = points["group"].astype(str)
     surface = pd.to_numeric(points["theta_a_deg_92"], errors="coerce").round(6)
-    if groups.nunique() >= 2:
+    friction = pd.to_numeric(points["friction_ps"], errors="coerce")
+    fittable_without = lambda g: bool((friction[groups != g].value_counts() >= MIN_POINTS).all()
+                                      and friction[groups != g].nunique() == friction.nunique())
+    if groups.nunique() >= 2 and all(fittable_without(g) for g in groups.unique()):
         held = [(groups == g, f"without {g}", "group held out") for g in sorted(groups.unique())]
     elif surface.nunique() >= 3:
         held = [(surface == a, f"without θa {a:.1f}°", "surface held out") for a in sorted(surface.dropna().unique())]
