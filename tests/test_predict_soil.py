@@ -93,6 +93,7 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
     code, err = _predict(capsys, "--soil", str(card))            # dektak-1 at D50 0.14 mm: θa 2.5°
     assert code == 2 and "outside the fitted range" in err and "--simulate" in err, err
+    assert f"error: {PROFILE}: θa" in err, err                     # the error names the file
 
 
 def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):

@@ -727,7 +727,7 @@ def _cmd_predict_dem(args) -> int:
 def _cmd_predict(args) -> int:
     import math
 
-    from interphase.analysis.criterion import predict_measured
+    from interphase.analysis.criterion import OutOfFitRange, predict_measured
     from interphase.report.build import criterion_model
 
     fit, soil = args.fit, None
@@ -749,7 +749,7 @@ def _cmd_predict(args) -> int:
     try:
         res = predict_measured(model, scan, d50, args.friction, args.axis, args.filter, where="--axis")
     except InputError as exc:
-        if soil is None or exc.where != "PROFILE" or scan.areal:     # --simulate takes one line, not a scan
+        if soil is None or not isinstance(exc, OutOfFitRange) or scan.areal:   # --simulate takes one line, not a scan
             raise
         raise InputError(exc.message, where=exc.where, fix=f"{exc.fix}, or add --simulate to run the DEM on this "
                          "profile with the card's grains") from exc

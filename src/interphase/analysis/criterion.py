@@ -449,15 +449,25 @@ def predict_measured(model: CriterionModel, scan, d50: float, friction: float, a
                      filt: int | None = None, where: str = "axis") -> ProfilePrediction:
     """A measured surface as read (surface.readers.read_scan, metres) → the chain: a line profile
     centerline-corrected (predict_profile; it has only the x axis, `where` names the option that
-    gave another), an areal scan along +`axis` (predict_scan, default x)."""
-    if scan.areal:
-        return predict_scan(model, scan, d50, friction, axis or "x", filt)
-    if axis not in (None, "x"):
+    gave another), an areal scan along +`axis` (predict_scan, default x). A θa outside the fits is
+    refused naming the file (`scan.name`)."""
+    if axis not in (None, "x") and not scan.areal:
         raise InputError("a line profile has only the x axis", where=where, fix=f"omit {where} for a line")
     from interphase.surface.filters import prepare_measured
     from interphase.surface.lines import scan_profile
 
-    return predict_profile(model, prepare_measured(scan_profile(scan)), d50, friction, filt)
+    try:
+        if scan.areal:
+            return predict_scan(model, scan, d50, friction, axis or "x", filt)
+        return predict_profile(model, prepare_measured(scan_profile(scan)), d50, friction, filt)
+    except InputError as exc:
+        if exc.where != "PROFILE":
+            raise
+        raise OutOfFitRange(exc.message, where=scan.name, fix=exc.fix) from exc
+
+
+class OutOfFitRange(InputError):
+    """A surface whose θa lies outside the fitted range (the correlation would be extrapolated)."""
 
 
 def _rule_of(d) -> tuple | None:
