@@ -340,3 +340,50 @@ def test_a_started_case_takes_the_source_runs_grains_and_platen(tmp_path, device
     missing = case.replace(start=Start("liggghts", "fedcba987654", str(tmp_path / "nowhere")))
     with pytest.raises(InputError, match="fedcba987654"):
         device_module.device(missing)
+
+
+def _smallest_angle_deg(points: np.ndarray, tri: np.ndarray) -> float:
+    """The smallest interior angle of any triangle [°]."""
+    p = points[tri]                                     # (n, 3 vertices, xyz)
+    worst = 180.0
+    for i in range(3):
+        a, b = p[:, (i + 1) % 3] - p[:, i], p[:, (i + 2) % 3] - p[:, i]
+        cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+        worst = min(worst, float(np.degrees(np.arccos(np.clip(cos, -1, 1))).min()))
+    return worst
+
+
+@pytest.mark.parametrize("device", ["periodic", "walled", "periodic3d"])
+def test_a_finely_sampled_line_is_meshed_as_the_engine_accepts(device):
+    """A Dektak line (77 nm steps, 0.46 µm of relief) under sand-sized grains: the surface the case
+    gives the engines is sampled no finer than surface.builder.mesh_step, so every triangle of the
+    extruded wall keeps an angle above LIGGGHTS's 0.256° (its refusal, bad_mesh, before a run); the
+    measured line itself (prepare_measured) is over 30× finer."""
+    from interphase.surface.builder import LIGGGHTS_MIN_ANGLE_DEG, file_spec, mesh_step
+    from interphase.surface.mesh import extruded_triangles
+
+    kw = dict(box_depth_d50=10.0) if device == "periodic3d" else {}
+    sand = Gradation(name="user", sizes=(0.10e-3, 0.14e-3, 0.2e-3), fractions=(0.3, 0.4, 0.3))
+    case = Case(test="interface", device=device, d50=0.14e-3, gradation=sand, n_grains=200, box_length_d50=40,
+                box_height_d50=10, profile=file_spec(ROOT / "campaigns" / "profiles" / "dektak-1.csv", units=None), **kw)
+    prof = case.surface()
+    step = float(np.diff(prof.x).min())
+    assert step >= 0.5 * mesh_step(case.d50, case.wall_width) and step > 30 * 77e-9
+    dev = device_module.device(case)
+    points, tri = extruded_triangles(prof, -dev.wall_reach, dev.wall_reach)
+    assert _smallest_angle_deg(points, tri) > LIGGGHTS_MIN_ANGLE_DEG
+
+
+def test_the_study_measured_lines_keep_every_point():
+    """mesh_step changes no surface already run: the study's FRT lines (Group 5, 24 µm steps under
+    0.7 mm grains) come out point for point as the full-resolution line."""
+    from interphase.campaign.schema import load_campaign
+    from interphase.surface.builder import periodic_cell
+
+    camp = load_campaign(ROOT / "campaigns" / "group5.toml")
+    files = {repr(c.case.profile): c.case for c in camp.cases if c.case.profile is not None and c.case.profile.kind == "file"}
+    assert len(files) >= 2
+    for case in files.values():
+        full = periodic_cell(case.profile, case.d50, case.box_length_d50 * case.d50)
+        got = case.surface()
+        assert got.x.size == full.x.size and np.array_equal(got.x, full.x) and np.array_equal(got.z, full.z)

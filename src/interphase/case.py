@@ -227,7 +227,7 @@ class Case:
         generated and cut, see surface.builder.periodic_cell)."""
         from interphase.surface.builder import periodic_cell
 
-        return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50)
+        return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50, self._extruded_over)
 
     @functools.cached_property
     def _cell_y(self):
@@ -240,6 +240,18 @@ class Case:
     def surface_across(self):
         """The relief across the shear (a Profile whose x is y + W/2 [m]), or None: extruded."""
         return self._cell_y if self.profile_y is not None else None
+
+    @property
+    def wall_width(self) -> float:
+        """The extent of the walls and the surface across the shear (y) [m]: quasi-2D, 0.9·d_max on
+        each side of the grains' plane (beyond any grain); the 3D device, its depth."""
+        return self.box_depth if self.three_d else 1.8 * self.gradation.d_max
+
+    @property
+    def _extruded_over(self) -> float | None:
+        """The width the surface's profile is extruded over [m] (its triangles span it; what a
+        measured line's sampling must allow, surface.builder.mesh_step), None with a relief across."""
+        return None if self.profile_y is not None else self.wall_width
 
     @property
     def thickness(self) -> float:
@@ -264,7 +276,7 @@ class Case:
         if self.periodic:       # exactly [0, L]: the engine wraps it as it slides
             return self._cell
         m = self.surface_margin
-        prof = from_spec(self.profile, self.d50, self.box_length + self.shear_distance + 2 * m)
+        prof = from_spec(self.profile, self.d50, self.box_length + self.shear_distance + 2 * m, self._extruded_over)
         return Profile(prof.x - m, prof.z, prof.periodic, prof.name)
 
     def sheared_surface(self):

@@ -198,7 +198,7 @@ def device(case: Case, recipe: Recipe = RECIPE) -> Device:
     pack, dz = _started(case, pack, platen_z)
     platen_z += dz
     inset = 0.02 * d_max
-    return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=0.45 * d_max * 2,
+    return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * d_min, wall_reach=case.wall_width / 2,
                   moving=moving, fixed=fixed, exits=exits,
                   platen=((L - inset, platen_z, inset, platen_z),), platen_com=(L / 2, platen_z),
                   platen_force=case.normal_stress * L * case.thickness, bounds=(x_lo, x_hi, z_lo, wall_top + 2 * d_max),
@@ -251,7 +251,7 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     zs = np.where(np.arange(2 * n + 1) % 2 == 1, base - h, base)
     depth = case.box_depth if case.three_d else None
     return Device(case=case, recipe=recipe, dt=dt, skin=recipe.skin_fraction * case.gradation.d_min,
-                  wall_reach=0.45 * d_max * 2 if depth is None else depth / 2, moving=moving, fixed=(), exits=None,
+                  wall_reach=case.wall_width / 2, moving=moving, fixed=(), exits=None,
                   platen=_segments(xs, zs), platen_com=(L / 2, base),
                   platen_force=case.normal_stress * L * case.thickness,
                   bounds=(0.0, L, z_lo, top), window=window, packing=pack,
