@@ -375,14 +375,17 @@ def test_a_finely_sampled_line_is_meshed_as_the_engine_accepts(device):
 
 
 def test_the_study_measured_lines_keep_every_point():
-    """mesh_step changes no surface already run: the study's FRT lines (Group 5, 24 µm steps under
-    0.7 mm grains) come out point for point as the full-resolution line."""
+    """mesh_step changes no surface already run: the study's FRT lines (Group 5 in both gradations,
+    24 µm steps under 0.7 mm grains) come out point for point as the full-resolution line."""
     from interphase.campaign.schema import load_campaign
     from interphase.surface.builder import periodic_cell
 
-    camp = load_campaign(ROOT / "campaigns" / "group5.toml")
-    files = {repr(c.case.profile): c.case for c in camp.cases if c.case.profile is not None and c.case.profile.kind == "file"}
-    assert len(files) >= 2
+    files = {}
+    for name in ("group5.toml", "study.toml"):
+        camp = load_campaign(ROOT / "campaigns" / name)
+        files |= {(repr(c.case.profile), c.case.gradation.name): c.case for c in camp.cases
+                  if c.case.profile is not None and c.case.profile.kind == "file"}
+    assert len(files) >= 4 and {g for _, g in files} == {"mono", "poly"}
     for case in files.values():
         full = periodic_cell(case.profile, case.d50, case.box_length_d50 * case.d50)
         got = case.surface()

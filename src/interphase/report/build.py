@@ -85,8 +85,9 @@ def criterion_checks(chain: CriterionModel, points: pd.DataFrame) -> pd.DataFram
     predicting surfaces it has not seen, as a user's new surface). Otherwise (one group, or a Group 1
     design with a few measured or flat surfaces beside it) each surface is held out instead, all its
     frictions together (fold 'surface held out', surfaces told apart by θa > 92°, a flat at 0); the
-    lowest and highest θa are then outside the other surfaces' fits and stay unpredicted. The two-constant rule is fitted on the same cases in each fold
-    (fit_rule). None without θa–θr and E–θr fits."""
+    lowest and highest θa are then outside the other surfaces' fits and stay unpredicted. The
+    two-constant rule is fitted on the same cases in each fold (fit_rule). None without θa–θr and
+    E–θr fits."""
     from interphase.analysis.correlations import MIN_POINTS, fit_study
 
     if not chain.theta_r or chain.efficiency is None or points.empty:

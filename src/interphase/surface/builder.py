@@ -41,8 +41,8 @@ def mesh_step(d50: float, wall_width: float | None = None) -> float:
     whose triangles reach LIGGGHTS's smallest angle. A Dektak line (77 nm steps) under the Karlsruhe
     sand (D50 0.14 mm, quasi-2D walls 0.41 mm wide) is resampled to 3.7 µm (0.026 D50): at 100 kPa
     the grains' Hertz contacts are 0.08–0.17 D50 across (mean overlaps 0.3–1.5 % of D50 at G 500–50
-    MPa), so nothing finer is felt. The study's FRT lines
-    (24 µm steps under 0.7 mm grains) are finer than neither and stay as measured."""
+    MPa), so nothing finer is felt. The study's FRT lines (24 µm steps under 0.7 mm grains) are
+    finer than neither and stay as measured."""
     return max(MIN_FACE_D50 * d50, 2 * _thinnest(wall_width))
 
 
@@ -115,8 +115,8 @@ def _measured(spec: ProfileSpec, d50: float) -> Profile:
 
 
 def _no_finer(prof: Profile, step: float) -> Profile:
-    """`prof` unchanged when no sample step is below `step` [m], else linearly resampled on a uniform
-    step of at least `step` (never interpolated finer than the instrument measured)."""
+    """`prof` unchanged when no sample step is below `step` [m], else linearly interpolated on a
+    uniform grid whose step is `step` or just above it."""
     if step <= 0 or float(np.diff(prof.x).min()) >= step:
         return prof
     x = np.linspace(prof.x[0], prof.x[-1], max(2, int(prof.length // step) + 1))
