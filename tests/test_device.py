@@ -356,10 +356,10 @@ def _smallest_angle_deg(points: np.ndarray, tri: np.ndarray) -> float:
 @pytest.mark.parametrize("device", ["periodic", "walled", "periodic3d"])
 def test_a_finely_sampled_line_is_meshed_as_the_engine_accepts(device):
     """A Dektak line (77 nm steps, 0.46 µm of relief) under sand-sized grains: the surface the case
-    gives the engines is sampled no finer than surface.builder.mesh_step, so every triangle of the
-    extruded wall keeps an angle above LIGGGHTS's 0.256° (its refusal, bad_mesh, before a run); the
-    measured line itself (prepare_measured) is over 30× finer."""
-    from interphase.surface.builder import LIGGGHTS_MIN_ANGLE_DEG, file_spec, mesh_step
+    gives the engines is resampled to the grains' contact scale (surface.builder.mesh_step, 0.1 D50
+    or more), its cut faces no shorter than min_face, so every triangle of the extruded wall keeps an
+    angle above LIGGGHTS's 0.256° (its refusal, bad_mesh, before a run)."""
+    from interphase.surface.builder import LIGGGHTS_MIN_ANGLE_DEG, file_spec, mesh_step, min_face
     from interphase.surface.mesh import extruded_triangles
 
     kw = dict(box_depth_d50=10.0) if device == "periodic3d" else {}
@@ -367,8 +367,9 @@ def test_a_finely_sampled_line_is_meshed_as_the_engine_accepts(device):
     case = Case(test="interface", device=device, d50=0.14e-3, gradation=sand, n_grains=200, box_length_d50=40,
                 box_height_d50=10, profile=file_spec(ROOT / "campaigns" / "profiles" / "dektak-1.csv", units=None), **kw)
     prof = case.surface()
-    step = float(np.diff(prof.x).min())
-    assert step >= 0.5 * mesh_step(case.d50, case.wall_width) and step > 30 * 77e-9
+    steps = np.diff(prof.x)
+    assert steps.min() >= min_face(case.d50, case.wall_width) * (1 - 1e-9)          # a cut's face
+    assert np.median(steps) >= mesh_step(case.d50, case.wall_width) >= 0.1 * case.d50   # the contact scale
     dev = device_module.device(case)
     points, tri = extruded_triangles(prof, -dev.wall_reach, dev.wall_reach)
     assert _smallest_angle_deg(points, tri) > LIGGGHTS_MIN_ANGLE_DEG

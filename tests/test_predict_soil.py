@@ -73,8 +73,9 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     """soils/karlsruhe-fine-sand-2d.toml names the criterion fitted on its Group 1
     (docs/reproduction/real_sand/2d/criterion.json): predict --soil answers on a tooth inside the
     fitted θa range with δ and its interval, from θa–θr lines fitted per friction (eight surfaces a
-    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs); a
-    measured profile outside the fitted θa range is refused, naming --simulate."""
+    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs); the
+    shipped Dektak line (θa 2.5° at this D50) is inside the range its flat and measured lines give;
+    a profile beyond the steepest tooth is refused, naming the file and --simulate."""
     import pandas as pd
 
     card = ROOT / "soils" / "karlsruhe-fine-sand-2d.toml"
@@ -91,9 +92,17 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "2d" / "ensembles.csv")
     assert fit["tan_phi"] == pytest.approx(ens["tan_phi"].median(), rel=1e-9)
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
-    code, err = _predict(capsys, "--soil", str(card))            # dektak-1 at D50 0.14 mm: θa 2.5°
+    code, out = _predict(capsys, "--soil", str(card), "--json")  # dektak-1 at D50 0.14 mm: θa 2.5°
+    assert code == 0 and 0 < out["theta_a_deg"] < 5.65, out       # under Group 1's lowest tooth: the
+    assert out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]   # flat and lines cover it
+    steep = tmp_path / "steep.txt"                                 # θa beyond the steepest tooth's 73.7°
+    assert main(["profile", "sawtooth", "--rt", "12", "--sw", "2", "--d50", "0.14", "--length", "6",
+                 "-o", str(steep)]) == 0
+    capsys.readouterr()
+    code = main(["predict", str(steep), "--friction", "0.2", "--soil", str(card)])
+    err = capsys.readouterr().err
     assert code == 2 and "outside the fitted range" in err and "--simulate" in err, err
-    assert f"error: {PROFILE}: θa" in err, err                     # the error names the file
+    assert f"error: {steep}: θa" in err, err                       # the error names the file
 
 
 def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):

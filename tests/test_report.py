@@ -211,11 +211,12 @@ def test_report_writes_every_run_as_one_small_summaries_file(quick_report):
 
 
 def test_one_group_of_surfaces_holds_out_each_surface():
-    """A campaign of one group (the committed quasi-2D Karlsruhe Group 1: 8 saw-teeth × 3 frictions)
-    is checked with each surface held out: its 6 interior surfaces predicted at every friction from
-    fits made without them (7 surfaces a friction, the per-friction fit's minimum); the lowest and
-    highest θa lie outside the others' fits and keep that reason; held out, the chain misses the same
-    cases by no less than in sample."""
+    """The committed quasi-2D Karlsruhe campaign (Group 1's 8 saw-teeth and, beside them, a flat and
+    two measured lines, × 3 frictions; the measured group too small to fit without Group 1) is
+    checked with each surface held out: every interior surface predicted at every friction from fits
+    made without it; the lowest θa (0: the flat and the line that is non-dilative at its mesh step)
+    and the highest lie outside the others' fits and keep that reason; held out, the chain misses the
+    same cases by no less than in sample."""
     from interphase.campaign.results import CommittedCurves
 
     folder = ROOT / "docs" / "reproduction" / "real_sand" / "2d"
@@ -223,9 +224,11 @@ def test_one_group_of_surfaces_holds_out_each_surface():
     checks = analyse(summ, campaign=None, store=CommittedCurves(folder / "curves.parquet"), n_boot=0).criterion_check
     assert set(checks["fold"]) == {"in-sample", "surface held out"}
     held = checks[checks["fold"] == "surface held out"]
-    assert len(held) == 24 and held["error_deg"].notna().sum() == 18
-    out = held[held["error_deg"].isna()]
-    assert set(out["theta_a_deg_92"].round(1)) == {5.7, 73.7}
+    theta = held["theta_a_deg_92"].round(1)
+    ends = theta.isin([theta.min(), theta.max()])
+    assert len(held) == (checks["fold"] == "in-sample").sum() >= 24 and theta.min() == 0.0
+    assert held.loc[ends, "error_deg"].isna().all() and held.loc[~ends, "error_deg"].notna().all()
+    out = held[ends]
     assert out["note"].str.contains("outside the fitted range").all()
     got = held.dropna(subset=["error_deg"]).set_index("physical_case")["error_deg"]
     ins = checks[checks["fold"] == "in-sample"].set_index("physical_case")["error_deg"].loc[got.index]

@@ -35,15 +35,23 @@ MIN_FACE_D50 = 0.02
 LIGGGHTS_MIN_ANGLE_DEG = 0.256
 
 
+#: The step a measured line that cannot be meshed as measured is resampled to [D50]: the grains'
+#: contact scale. At 100 kPa their Hertz contacts are 0.08–0.17 D50 across (mean overlaps 0.3–1.5 %
+#: of D50 at G 500–50 MPa); on facets much shorter than that LIGGGHTS resolves one grain's contact
+#: as several facet and edge contacts whose normals tilt away from every facet's. Measured on the
+#: Karlsruhe card's Dektak line at μs 0.05 (docs/methods.md, bench/mesh_step_check.py, 3 seeds):
+#: facets of 0.026 D50 read tan δ 0.070 with 31 % of the surface contacts tilted 1–20° on a mesh
+#: whose facets tilt < 2°; facets of 0.1 D50 read 0.055 with 5 %; the flat 0.050.
+CONTACT_STEP_D50 = 0.1
+
+
 def mesh_step(d50: float, wall_width: float | None = None) -> float:
-    """The finest sample step [m] a measured line keeps in a device: MIN_FACE_D50·D50, and for a
-    profile extruded over `wall_width` [m] (the walls' extent across the shear), twice the length
-    whose triangles reach LIGGGHTS's smallest angle. A Dektak line (77 nm steps) under the Karlsruhe
-    sand (D50 0.14 mm, quasi-2D walls 0.41 mm wide) is resampled to 3.7 µm (0.026 D50): at 100 kPa
-    the grains' Hertz contacts are 0.08–0.17 D50 across (mean overlaps 0.3–1.5 % of D50 at G 500–50
-    MPa), so nothing finer is felt. The study's FRT lines (24 µm steps under 0.7 mm grains) are
-    finer than neither and stay as measured."""
-    return max(MIN_FACE_D50 * d50, 2 * _thinnest(wall_width))
+    """The step [m] a measured line is resampled to when it cannot be meshed as measured (a sample
+    step under `min_face`): CONTACT_STEP_D50·D50, or twice the thinnest segment LIGGGHTS meshes over
+    `wall_width` [m] (the walls' extent across the shear) where that is longer. A Dektak line (77 nm
+    steps) under the Karlsruhe sand (D50 0.14 mm) becomes 14 µm; the study's FRT lines (24 µm steps
+    under 0.7 mm grains, 0.034 D50) mesh as measured and stay point for point."""
+    return max(CONTACT_STEP_D50 * d50, 2 * _thinnest(wall_width))
 
 
 def min_face(d50: float, wall_width: float | None = None) -> float:
@@ -86,7 +94,7 @@ def file_spec(path: str | Path, units: str | None = "m", cutoff: float | None = 
 
 def from_spec(spec: ProfileSpec, d50: float, length: float, wall_width: float | None = None) -> Profile:
     """The Profile a Case refers to, starting at x = 0 and covering at least `length` m; a measured
-    line sampled finer than mesh_step(d50, wall_width) is resampled to it (what a device meshes;
+    line sampled finer than a device meshes is resampled to the grains' contact scale (`_meshable`;
     `wall_width` [m] is the extent its surface is extruded over, None where it is not)."""
     if spec.kind == "flat":
         return flat(length)
@@ -99,7 +107,7 @@ def from_spec(spec: ProfileSpec, d50: float, length: float, wall_width: float | 
         return tile(selfaffine_profile(spec.param("hurst"), spec.param("rms_slope"), spec.param("long_cutoff"),
                                        spec.param("short_cutoff"), spec.param("length"), int(spec.param("seed")),
                                        d50=d50), length)
-    return tile(_no_finer(_measured(spec, d50), mesh_step(d50, wall_width)), length)
+    return tile(_meshable(_measured(spec, d50), d50, wall_width), length)
 
 
 def _measured(spec: ProfileSpec, d50: float) -> Profile:
@@ -114,11 +122,12 @@ def _measured(spec: ProfileSpec, d50: float) -> Profile:
     return prof
 
 
-def _no_finer(prof: Profile, step: float) -> Profile:
-    """`prof` unchanged when no sample step is below `step` [m], else linearly interpolated on a
-    uniform grid whose step is `step` or just above it."""
-    if step <= 0 or float(np.diff(prof.x).min()) >= step:
+def _meshable(prof: Profile, d50: float, wall_width: float | None) -> Profile:
+    """`prof` as measured when no sample step is under min_face(d50, wall_width); else linearly
+    interpolated on a uniform grid of mesh_step(d50, wall_width) or just above."""
+    if float(np.diff(prof.x).min()) >= min_face(d50, wall_width):
         return prof
+    step = mesh_step(d50, wall_width)
     x = np.linspace(prof.x[0], prof.x[-1], max(2, int(prof.length // step) + 1))
     return Profile(x, np.interp(x, prof.x, prof.z), prof.periodic, prof.name)
 
