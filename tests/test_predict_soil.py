@@ -72,7 +72,7 @@ def test_simulate_refuses_what_only_the_criterion_uses(tmp_path, capsys):
 def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     """soils/karlsruhe-fine-sand-2d.toml names the criterion fitted on its Group 1
     (docs/reproduction/real_sand/2d/criterion.json): predict --soil answers on a tooth inside the
-    fitted θa range with δ and its interval, from θa–θr lines fitted per friction (eight surfaces a
+    fitted θa range with δ and its interval, from θa–θr lines fitted per friction (ten surfaces a
     friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs); the
     shipped Dektak line (θa 2.5° at this D50) is inside the range its flat and measured lines give;
     a profile beyond the steepest tooth is refused, naming the file and --simulate."""
