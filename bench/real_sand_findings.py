@@ -60,6 +60,7 @@ def load(folder: Path) -> dict:
     iface["case"] = iface["label"].str.replace(r"-s\d+$", "", regex=True)
     keys = iface.groupby("case")[["rt", "friction_ps", "sw"]].first()
     cases = table[table["case"].isin(keys.index)].set_index("case").join(keys)
+    cases = cases[cases["rt"].notna()]      # Group 1's teeth; the flat and measured lines have no Rt
     cases["face_deg"] = np.degrees(np.arctan2(cases["rt"].astype(float), cases["sw"].astype(float) / 2))
     box = seeds[seeds["test"] == "box"]["peak"].to_numpy(float)
     return {"cases": cases.reset_index(), "seeds": seeds, "soil": box,
