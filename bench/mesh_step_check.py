@@ -26,6 +26,7 @@ from interphase.campaign.runner import run_case
 from interphase.campaign.schema import load_campaign
 from interphase.engines.liggghts import Liggghts
 from interphase.surface.builder import _measured, file_spec
+from interphase.surface.spec import ProfileSpec
 
 ROOT = Path(__file__).resolve().parents[1]
 CAMPAIGN = ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"
@@ -67,11 +68,11 @@ def main(argv=None) -> None:
     out.mkdir(parents=True, exist_ok=True)
     base = dektak_case()
     variants = {f"{frac:g} D50": file_spec(line_at(base, frac, out), units="m") for frac in args.steps}
-    variants["flat"] = None                  # the same case on a flat
+    variants["flat"] = ProfileSpec.make("flat")             # the same case on a flat
     rows = []
     for name, spec in variants.items():
         for seed in args.seeds:
-            case = dataclasses.replace(base, seed=seed, profile=spec if spec is not None else _flat())
+            case = dataclasses.replace(base, seed=seed, profile=spec)
             folder = out / f"{name.replace(' ', '')}_s{seed}"
             res = run_case(case, Liggghts(), folder)
             if res["status"] != "done":
@@ -83,12 +84,6 @@ def main(argv=None) -> None:
     print(g.agg(tan_delta=("tan_delta", "mean"), lo=("tan_delta", "min"), hi=("tan_delta", "max"),
                 theta_r=("theta_r", "mean"), tilted=("tilted", "mean"), normal_part=("normal_part", "mean"),
                 seeds=("seed", "count")).round(4).to_string())
-
-
-def _flat():
-    from interphase.surface.spec import ProfileSpec
-
-    return ProfileSpec.make("flat")
 
 
 if __name__ == "__main__":

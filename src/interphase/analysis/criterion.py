@@ -298,11 +298,15 @@ def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
                      where="--fit", fix="run more cases, or `--fit study` for the study's readings")
 
 
+class OutOfFitRange(InputError):
+    """A surface whose θa lies outside the fitted range (the correlation would be extrapolated)."""
+
+
 def _check_range(fit, value: float, what: str, model: CriterionModel) -> None:
     lo, hi = fit.x_range
     tol = 1e-9 * max(1.0, abs(hi - lo))
     if not (lo - tol <= value <= hi + tol):
-        raise InputError(f"{what} = {value:.2f}° is outside the fitted range {lo:.2f}–{hi:.2f}° of {model.source} "
+        raise OutOfFitRange(f"{what} = {value:.2f}° is outside the fitted range {lo:.2f}–{hi:.2f}° of {model.source} "
                          f"(the fits cover {coverage(model)})", where="PROFILE",
                          fix="the correlation would be extrapolated; fit a campaign that covers it")
 
@@ -460,14 +464,8 @@ def predict_measured(model: CriterionModel, scan, d50: float, friction: float, a
         if scan.areal:
             return predict_scan(model, scan, d50, friction, axis or "x", filt)
         return predict_profile(model, prepare_measured(scan_profile(scan)), d50, friction, filt)
-    except InputError as exc:
-        if exc.where != "PROFILE":
-            raise
+    except OutOfFitRange as exc:
         raise OutOfFitRange(exc.message, where=scan.name, fix=exc.fix) from exc
-
-
-class OutOfFitRange(InputError):
-    """A surface whose θa lies outside the fitted range (the correlation would be extrapolated)."""
 
 
 def _rule_of(d) -> tuple | None:
