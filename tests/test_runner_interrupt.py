@@ -35,3 +35,30 @@ def test_interruption_while_the_folder_is_prepared_is_recorded(tmp_path, monkeyp
     assert (folder / st.CASE_JSON).exists()
     assert st.folder_status(folder) == "interrupted"
     assert st.read_json(folder / st.FAILURE_JSON)["cause"] == "interrupted"
+
+
+def test_a_signal_landing_inside_popen_still_kills_the_engine(tmp_path, monkeypatch):
+    # Ctrl-C / SIGINT from `campaign stop` may land while Popen waits for the child's exec, after
+    # the fork: without the hold it raised out of Popen and the engine ran on (CI of stop 60)
+    import os
+    import signal
+    import subprocess
+
+    from interphase.engines import base
+
+    real = subprocess.Popen
+
+    class SignalledPopen(real):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            os.kill(os.getpid(), signal.SIGINT)    # delivered before Popen returns
+
+    monkeypatch.setattr(base.subprocess, "Popen", SignalledPopen)
+    try:
+        base.run_logged(["sleep", "30"], tmp_path, dict(os.environ), 60, "sleep")
+    except KeyboardInterrupt:
+        pass
+    else:
+        raise AssertionError("the interruption was swallowed")
+    assert runner.stale_engine_pids(tmp_path) == []
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handlers restored

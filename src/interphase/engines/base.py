@@ -337,15 +337,36 @@ def engine_spec(engine: "str | EngineSpec", **changes) -> EngineSpec:
     return dataclasses.replace(spec, **changes) if changes else spec
 
 
+def _spawn(cmd: list[str], **popen) -> tuple[subprocess.Popen, list[int]]:
+    """Popen with SIGINT and SIGTERM held, returned with the signals that arrived meanwhile. A signal
+    handled while Popen waits for the child's exec raises out of Popen after the fork: the engine
+    would run on in its own session with no one holding its pid (seen as an engine left running
+    after `campaign stop`). Outside the main thread handlers cannot be set, and none run there."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return subprocess.Popen(cmd, **popen), []
+    held: list[int] = []
+    old = {s: signal.signal(s, lambda signum, frame: held.append(signum))
+           for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        return subprocess.Popen(cmd, **popen), held
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+
+
 def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: str) -> int:
     """Run an engine: cwd = folder (never chdir), stdout + stderr to folder/engine.log, in its own
     session so that a timeout or an interruption kills the whole process group. Returns the return
     code; a timeout raises EngineError('timeout') with the log tail."""
     log = Path(folder) / "engine.log"
     with open(log, "wb") as out:
-        proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
-                                stdin=subprocess.DEVNULL, start_new_session=True)
+        proc, held = _spawn(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
+                            stdin=subprocess.DEVNULL, start_new_session=True)
         try:
+            for signum in held:
+                signal.raise_signal(signum)     # handled now that the engine can be killed
             return proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
