@@ -337,23 +337,23 @@ def engine_spec(engine: "str | EngineSpec", **changes) -> EngineSpec:
     return dataclasses.replace(spec, **changes) if changes else spec
 
 
-def _spawn(cmd: list[str], **popen) -> tuple[subprocess.Popen, list[int]]:
-    """Popen with SIGINT and SIGTERM held, returned with the signals that arrived meanwhile. A signal
-    handled while Popen waits for the child's exec raises out of Popen after the fork: the engine
-    would run on in its own session with no one holding its pid (seen as an engine left running
-    after `campaign stop`). Outside the main thread handlers cannot be set, and none run there."""
+def _hold_signals(held: list[int]) -> dict:
+    """Replace the SIGINT and SIGTERM handlers by one that appends the signal to `held`; returns the
+    handlers to restore. Around Popen: a signal handled while Popen waits for the child's exec raises
+    out of Popen after the fork, and the engine runs on in its own session with no one holding its
+    pid (seen as an engine left running after `campaign stop`). Handlers exist in the main thread
+    only; elsewhere none run, and nothing is held."""
     import threading
 
     if threading.current_thread() is not threading.main_thread():
-        return subprocess.Popen(cmd, **popen), []
-    held: list[int] = []
-    old = {s: signal.signal(s, lambda signum, frame: held.append(signum))
-           for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        return subprocess.Popen(cmd, **popen), held
-    finally:
-        for s, handler in old.items():
-            signal.signal(s, handler)
+        return {}
+    return {s: signal.signal(s, lambda signum, frame: held.append(signum))
+            for s in (signal.SIGINT, signal.SIGTERM)}
+
+
+def _restore(handlers: dict) -> None:
+    for s, handler in handlers.items():
+        signal.signal(s, handler)
 
 
 def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: str) -> int:
@@ -362,11 +362,20 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
     code; a timeout raises EngineError('timeout') with the log tail."""
     log = Path(folder) / "engine.log"
     with open(log, "wb") as out:
-        proc, held = _spawn(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
-                            stdin=subprocess.DEVNULL, start_new_session=True)
+        held: list[int] = []
+        handlers = _hold_signals(held)
         try:
+            proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
+                                    stdin=subprocess.DEVNULL, start_new_session=True)
+        except BaseException:
+            _restore(handlers)
+            for signum in held:             # an interruption outranks the failed start
+                signal.raise_signal(signum)
+            raise
+        try:
+            _restore(handlers)          # inside the try: a signal from here on kills the engine
             for signum in held:
-                signal.raise_signal(signum)     # handled now that the engine can be killed
+                signal.raise_signal(signum)
             return proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
