@@ -78,12 +78,10 @@ def _group_ends(pgid: int, timeout: float = 60) -> None:
     _wait_for(gone, timeout, f"every process of the campaign's group {pgid} to end")
 
 
-def _no_engine_left(out: Path, grace: float = 0.0) -> None:
-    # an engine signalled as the campaign exits may take a moment to be reaped on a loaded machine
-    # (seen once with 4 other engines on the 2 cores); one still alive after `grace` s was left running
-    deadline = time.monotonic() + grace
-    while any(stale_engine_pids(f) for f in _folders(out)) and time.monotonic() < deadline:
-        time.sleep(0.2)
+def _no_engine_left(out: Path) -> None:
+    # engines are killed and waited for before their worker reports the case, and the campaign waits
+    # for its workers: an engine alive once the campaign has exited was left running (CI of stop 60:
+    # a signal landing inside Popen did that, engines.base.run_logged holds it now)
     for folder in _folders(out):
         assert stale_engine_pids(folder) == [], f"engine still running in {folder}"
 
@@ -154,8 +152,9 @@ def test_ctrl_c_stops_cleanly_and_records_interrupted(campaign):
     for f in interrupted:
         assert not (f / "DONE").exists()
         assert json.loads((f / "failure.json").read_text())["cause"] == "interrupted"
-    assert all(folder_status(f) in ("done", "interrupted") for f in _folders(out))
-    _no_engine_left(out, grace=10.0)
+    statuses = {f.name: folder_status(f) for f in _folders(out)}
+    assert set(statuses.values()) <= {"done", "interrupted"}, (statuses, text)
+    _no_engine_left(out)
 
 
 def test_sigterm_to_the_campaign_alone_starts_no_case_after_it(campaign):

@@ -62,3 +62,31 @@ def test_a_signal_landing_inside_popen_still_kills_the_engine(tmp_path, monkeypa
         raise AssertionError("the interruption was swallowed")
     assert runner.stale_engine_pids(tmp_path) == []
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handlers restored
+
+
+def test_an_engine_dead_before_it_left_the_group_is_reaped_and_the_interruption_raised(tmp_path, monkeypatch):
+    # a Ctrl-C to the campaign's group can reach the engine's child between fork and setsid: it dies
+    # there, with no group of its own to kill; the interruption, not a ProcessLookupError, is recorded
+    import os
+    import signal
+    import subprocess
+
+    from interphase.engines import base
+
+    real = subprocess.Popen
+
+    class DiedInTheGroup(real):
+        def __init__(self, *args, **kwargs):
+            kwargs["start_new_session"] = False      # it never left the caller's group
+            super().__init__(["true"], **{k: v for k, v in kwargs.items() if k != "args"})
+            while os.waitid(os.P_PID, self.pid, os.WEXITED | os.WNOWAIT) is None:
+                pass                                  # dead, not yet reaped
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(base.subprocess, "Popen", DiedInTheGroup)
+    try:
+        base.run_logged(["sleep", "30"], tmp_path, dict(os.environ), 60, "sleep")
+    except KeyboardInterrupt:
+        pass
+    else:
+        raise AssertionError("the interruption was swallowed")

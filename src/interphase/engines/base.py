@@ -356,6 +356,17 @@ def _restore(handlers: dict) -> None:
         signal.signal(s, handler)
 
 
+def _kill_group(proc: subprocess.Popen) -> None:
+    """SIGKILL the engine's session and reap it. An engine gone before its setsid has no group: a
+    Ctrl-C to the campaign's group reaches a child forked a moment before it left that group, and it
+    dies there, before exec (seen: ProcessLookupError recorded as a failed case)."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait()
+
+
 def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: str) -> int:
     """Run an engine: cwd = folder (never chdir), stdout + stderr to folder/engine.log, in its own
     session so that a timeout or an interruption kills the whole process group. Returns the return
@@ -378,11 +389,9 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
                 signal.raise_signal(signum)
             return proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+            _kill_group(proc)
             raise EngineError("timeout", f"{name} ran longer than {timeout:.0f} s", command=cmd,
                               log_tail=log_tail(log), folder=folder) from None
         except BaseException:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+            _kill_group(proc)
             raise
