@@ -3,10 +3,17 @@ interrupted, never as an unexplained 'incomplete' one."""
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+
+import pytest
+
 from interphase.campaign import runner
 from interphase.campaign import store as st
 from interphase.campaign.runner import Interrupted, run_case
 from interphase.case import Case
+from interphase.engines import base
 from interphase.engines.base import engine_spec
 from interphase.surface.spec import ProfileSpec
 
@@ -37,56 +44,35 @@ def test_interruption_while_the_folder_is_prepared_is_recorded(tmp_path, monkeyp
     assert st.read_json(folder / st.FAILURE_JSON)["cause"] == "interrupted"
 
 
+
+def _run_sleep(tmp_path, monkeypatch, popen) -> None:
+    """run_logged on `sleep 30` started by `popen`; the interruption it meets must come out of it."""
+    monkeypatch.setattr(base.subprocess, "Popen", popen)
+    with pytest.raises(KeyboardInterrupt):
+        base.run_logged(["sleep", "30"], tmp_path, dict(os.environ), 60, "sleep")
+
+
 def test_a_signal_landing_inside_popen_still_kills_the_engine(tmp_path, monkeypatch):
     # Ctrl-C / SIGINT from `campaign stop` may land while Popen waits for the child's exec, after
     # the fork: without the hold it raised out of Popen and the engine ran on (CI of stop 60)
-    import os
-    import signal
-    import subprocess
-
-    from interphase.engines import base
-
-    real = subprocess.Popen
-
-    class SignalledPopen(real):
+    class SignalledPopen(subprocess.Popen):
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             os.kill(os.getpid(), signal.SIGINT)    # delivered before Popen returns
 
-    monkeypatch.setattr(base.subprocess, "Popen", SignalledPopen)
-    try:
-        base.run_logged(["sleep", "30"], tmp_path, dict(os.environ), 60, "sleep")
-    except KeyboardInterrupt:
-        pass
-    else:
-        raise AssertionError("the interruption was swallowed")
+    before = signal.getsignal(signal.SIGINT)
+    _run_sleep(tmp_path, monkeypatch, SignalledPopen)
     assert runner.stale_engine_pids(tmp_path) == []
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # handlers restored
+    assert signal.getsignal(signal.SIGINT) is before       # handlers restored
 
 
 def test_an_engine_dead_before_it_left_the_group_is_reaped_and_the_interruption_raised(tmp_path, monkeypatch):
     # a Ctrl-C to the campaign's group can reach the engine's child between fork and setsid: it dies
-    # there, with no group of its own to kill; the interruption, not a ProcessLookupError, is recorded
-    import os
-    import signal
-    import subprocess
-
-    from interphase.engines import base
-
-    real = subprocess.Popen
-
-    class DiedInTheGroup(real):
-        def __init__(self, *args, **kwargs):
-            kwargs["start_new_session"] = False      # it never left the caller's group
-            super().__init__(["true"], **{k: v for k, v in kwargs.items() if k != "args"})
-            while os.waitid(os.P_PID, self.pid, os.WEXITED | os.WNOWAIT) is None:
-                pass                                  # dead, not yet reaped
+    # there, with no group of its own to kill; the interruption, not a ProcessLookupError, comes out
+    class DiedInTheGroup(subprocess.Popen):
+        def __init__(self, args, **kwargs):
+            super().__init__(["true"], **{**kwargs, "start_new_session": False})
+            os.waitid(os.P_PID, self.pid, os.WEXITED | os.WNOWAIT)    # dead, not yet reaped
             os.kill(os.getpid(), signal.SIGINT)
 
-    monkeypatch.setattr(base.subprocess, "Popen", DiedInTheGroup)
-    try:
-        base.run_logged(["sleep", "30"], tmp_path, dict(os.environ), 60, "sleep")
-    except KeyboardInterrupt:
-        pass
-    else:
-        raise AssertionError("the interruption was swallowed")
+    _run_sleep(tmp_path, monkeypatch, DiedInTheGroup)
