@@ -25,6 +25,7 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -343,17 +344,18 @@ def _hold_signals(held: list[int]) -> dict:
     out of Popen after the fork, and the engine runs on in its own session with no one holding its
     pid (seen as an engine left running after `campaign stop`). Handlers exist in the main thread
     only; elsewhere none run, and nothing is held."""
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         return {}
     return {s: signal.signal(s, lambda signum, frame: held.append(signum))
             for s in (signal.SIGINT, signal.SIGTERM)}
 
 
-def _restore(handlers: dict) -> None:
+def _release(handlers: dict, held: list[int]) -> None:
+    """Restore the handlers `_hold_signals` replaced, then raise the signals it held through them."""
     for s, handler in handlers.items():
         signal.signal(s, handler)
+    for signum in held:
+        signal.raise_signal(signum)
 
 
 def _kill_group(proc: subprocess.Popen) -> None:
@@ -379,14 +381,10 @@ def run_logged(cmd: list[str], folder: Path, env: dict, timeout: float, name: st
             proc = subprocess.Popen(cmd, cwd=folder, stdout=out, stderr=subprocess.STDOUT, env=env,
                                     stdin=subprocess.DEVNULL, start_new_session=True)
         except BaseException:
-            _restore(handlers)
-            for signum in held:             # an interruption outranks the failed start
-                signal.raise_signal(signum)
+            _release(handlers, held)        # an interruption outranks the failed start
             raise
         try:
-            _restore(handlers)          # inside the try: a signal from here on kills the engine
-            for signum in held:
-                signal.raise_signal(signum)
+            _release(handlers, held)    # inside the try: a signal from here on kills the engine
             return proc.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
             _kill_group(proc)
