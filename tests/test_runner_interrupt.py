@@ -44,7 +44,6 @@ def test_interruption_while_the_folder_is_prepared_is_recorded(tmp_path, monkeyp
     assert st.read_json(folder / st.FAILURE_JSON)["cause"] == "interrupted"
 
 
-
 def _run_sleep(tmp_path, monkeypatch, popen) -> None:
     """run_logged on `sleep 30` started by `popen`; the interruption it meets must come out of it."""
     monkeypatch.setattr(base.subprocess, "Popen", popen)
