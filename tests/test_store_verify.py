@@ -147,6 +147,27 @@ def test_done_removed_behind_the_index_is_corrected(runs):
         assert cid not in set(store.summaries()["case_id"])
 
 
+def test_a_queued_rerun_reads_queued_while_its_run_holds_the_lock(runs, capsys):
+    """A case a live `campaign run` has queued again, whose folder still holds its last attempt's
+    failure (a stop's "interrupted"): `status` and a dry run read it as queued while that run holds
+    the campaign's lock (here the lock itself, taken by this process: the run it stands for cannot
+    be reached mid-flight), and as the folder says once the lock is free."""
+    toml, out = runs
+    cid = _done_interface(toml, out)
+    (out / cid / "DONE").unlink()
+    (out / cid / "failure.json").write_text(json.dumps({"status": "interrupted", "cause": "interrupted",
+                                                         "message": "stopped during setup: SIGINT"}))
+    assert folder_status(out / cid) == "interrupted"
+    with CampaignStore(out) as store, store.lock():
+        store.set_status(cid, "queued")
+        assert _status(toml, out).loc[cid, "status"] == "queued"
+        text = _dry(toml, out, capsys)
+        assert "a `campaign run` is running" in text and f"queued        {cid}" in text, text
+    assert _status(toml, out).loc[cid, "status"] == "interrupted"
+    text = _dry(toml, out, capsys)
+    assert "a `campaign run` is running" not in text and f"run           {cid}" in text, text
+
+
 def test_unknown_folder_is_indexed_and_an_older_scheme_is_unverifiable(runs):
     """A folder the index does not know (here: a copy carrying an id of the older scheme — engine
     version + template hash, no recipe id) is indexed when the campaign is read; it cannot be hashed,

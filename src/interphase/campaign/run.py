@@ -459,14 +459,19 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     engines = {}
     indexed: dict = {}
     stale: dict = {}
+    active = False                  # a `campaign run` holds the lock: its queued/running rows are real
     if campaign.output.is_dir() and isinstance(planned, list):
         with st.CampaignStore(campaign.output) as store:
             stale = find_stale(planned, store.status(), builds or {})
             indexed = store.statuses()
+            active = store.run_active()
     total = f"{len(planned)} cases" if isinstance(planned, list) else "cases read one at a time"
     if campaign.seeds is not None:
         total = f"this round {total} (the seeds asked for now, with their box tests)"
     print(f"campaign {campaign.name} (dry run, {executor}): {total} → {campaign.output}", file=stream, flush=True)
+    if active:
+        print(f"  a `campaign run` is running in {campaign.output} now: another would be refused until it ends; "
+              "`campaign stop` ends it after its running cases", file=stream, flush=True)
     tallies: dict[str, int] = {}
     n, seconds = 0, 0.0
     measured = [0, 0.0, 0.0]        # finished runs read here: count, their engine seconds, their estimate
@@ -484,11 +489,14 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
             action = "skip (done)"
         elif state in st.KEPT_STATUSES:
             action = f"rerun ({state})" if rerun_failed else f"skip ({state})"
+        elif active and indexed.get(p.case_id) in ("queued", "running"):
+            action = indexed[p.case_id]
         else:
             action = "run"
         tallies[action] = tallies.get(action, 0) + 1
         n += 1
-        seconds += estimate_seconds(p.case) if action == "run" or action.startswith("rerun") else 0.0
+        left = action in ("run", "queued", "running") or action.startswith("rerun")   # what is left to run
+        seconds += estimate_seconds(p.case) if left else 0.0
         if action == "skip (done)" and measured[0] < CALIBRATION_RUNS:
             took = (st.read_json(folder / st.CASE_JSON) or {}).get("timings", {}).get("execute")
             if isinstance(took, (int, float)) and took > 0:

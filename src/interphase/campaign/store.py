@@ -423,9 +423,8 @@ class CampaignStore:
             if known and (known[0] == status or (status == "done" and known[0] == "corrupt")) \
                     and (known[0] != "done" or known[1]):
                 continue   # a done folder's verdict is kept up to date by reconcile()
-            if known and known[0] in ("queued", "running") and status in ("pending", "incomplete") \
-                    and self.run_active():
-                continue   # a run at work (`status` while it runs) knows better than the folder
+            if known and known[0] in ("queued", "running") and status != "done" and self.run_active():
+                continue   # a run at work knows better than the folder (an older attempt's failure, say)
             rec = folder_record(folder) if status != "pending" else None
             if rec is None:
                 rec = {"case_id": p.case_id, "status": status, "attempts": 0, "updated": now}
@@ -455,8 +454,8 @@ class CampaignStore:
                 continue
             folder = self.root / cid
             fs = folder_status(folder) if folder.exists() else "pending"
-            if not stale_running and status in ("queued", "running") and fs in ("pending", "incomplete"):
-                continue
+            if not stale_running and status in ("queued", "running") and fs != "done":
+                continue   # a queued rerun's folder still holds its last attempt's failure
             if fs == "done":
                 # (no identity: indexed by a version that did not record it)
                 stale = (status not in ("done", "corrupt") or checked != folder_fingerprint(folder)
