@@ -1,6 +1,6 @@
 """Issue 38's findings on the Karlsruhe fine sand, from the committed tables (no runs, no engine).
 
-    PYTHONPATH=src python bench/real_sand_findings.py
+    PYTHONPATH=src python bench/real_sand_findings.py [--figure PNG]
 
 Reads docs/reproduction/real_sand/2d/ (campaigns/real_sand/group1_kfs_2d.toml, the quasi-2D card) and
 docs/reproduction/real_sand/3d/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
@@ -20,6 +20,8 @@ Prints Markdown for docs/reproduction.md:
      average stress (the Mohr circle in x–z; methods.md §6), with the major principal direction
      from the vertical; the quasi-2D one beside the same discs' biaxial φ_peak at TMD17's state
      (docs/soils/karlsruhe-fine-sand-2d/verification_tmd17_6seeds.csv).
+With --figure, draws the two cells per friction against θa: E (upper row) and tan δ (lower row) with
+their 95 % intervals, E = 1 and each soil's tan φ as lines (the reading of item 4 at a glance).
 The break of E–θr and the criterion's skill are the report's (`bench/refit_reproduction.py --kfs2d
 --kfs3d`: correlations.csv, criterion_check.md). A measurement: exit 0 whatever it finds.
 """
@@ -154,7 +156,50 @@ def box_reading(name: str, folder: Path) -> None:
               f"{v['phi_peak_deg']:.1f}° ({v['phi_peak_deg_lo']:.1f}–{v['phi_peak_deg_hi']:.1f}°)")
 
 
+def figure(data: dict, path: Path) -> None:
+    """E and tan δ against θa per friction, one series per cell, 95 % intervals as bars."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mus = sorted({mu for d in data.values() for mu in d["cases"]["friction_ps"].unique()})
+    fig, axes = plt.subplots(2, len(mus), figsize=(3.6 * len(mus), 6.4), sharex=True, sharey="row",
+                             squeeze=False)
+    style = {"quasi-2D": ("o", "tab:blue"), "3D": ("s", "tab:red")}
+    for j, mu in enumerate(mus):
+        for name, d in data.items():
+            c = d["cases"][d["cases"]["friction_ps"] == mu].sort_values("theta_a_deg_92")
+            if c.empty:
+                continue
+            marker, colour = style.get(name, ("^", "k"))
+            x = c["theta_a_deg_92"].to_numpy(float)
+            for i, q in enumerate(("E", "tan_delta")):
+                y = c[q].to_numpy(float)
+                err = np.vstack([y - c[q + "_lo"].to_numpy(float), c[q + "_hi"].to_numpy(float) - y])
+                lo, hi = int(c["seeds"].min()), int(c["seeds"].max())
+                axes[i, j].errorbar(x, y, yerr=err, marker=marker, color=colour, capsize=2, lw=1,
+                                    label=f"{name} ({lo if lo == hi else f'{lo}–{hi}'} seeds)")
+            axes[1, j].axhline(d["tan_phi"], color=colour, ls=":", lw=1)
+        axes[0, j].axhline(1.0, color="grey", lw=0.8)
+        axes[0, j].set_title(f"μs {mu:g}")
+        axes[1, j].set_xlabel("θa (> 92°) [°]")
+        axes[0, j].legend(fontsize=7, loc="lower right")
+    axes[0, 0].set_ylabel("E = tan δ / tan φ")
+    axes[1, 0].set_ylabel("tan δ (dotted: the cell's soil tan φ)")
+    fig.suptitle("Karlsruhe fine sand, Group 1: the 3D and quasi-2D cards per case (95 % intervals)", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    print(f"\nwrote {path}")
+
+
 def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--figure", type=Path, help="draw E and tan δ of both cells against θa to this PNG")
+    args = ap.parse_args()
     data = {name: load(folder) for name, folder in CELLS.items() if (folder / "summaries.csv").exists()}
     for name, d in data.items():
         e_table(name, d)
@@ -165,6 +210,8 @@ def main() -> None:
             box_reading(name, folder)
     if len(data) == 2:
         three_vs_two(data["quasi-2D"], data["3D"])
+    if args.figure:
+        figure(data, args.figure)
 
 
 if __name__ == "__main__":
