@@ -11,7 +11,7 @@ The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its r
 repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
 (and, with --figures, its figures to docs/reproduction/figures/); any other set's correlations.csv,
 criterion.json, criterion_check.md, ensembles.csv (and, with --figures, the figures its folder
-already holds) to its folder: every committed number then comes from the committed curves (float32;
+already holds, or SET_FIGURES where it holds none) to its folder: every committed number then comes from the committed curves (float32;
 a report on the runs themselves differs from them in the fourth digit).
 Bootstrap refits per correlation: 99 (the shipped criterion's count) unless --boot.
 """
@@ -35,6 +35,10 @@ SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
         "kfs2d": (REPRO / "real_sand" / "2d", ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"),
         "kfs3d": (REPRO / "real_sand" / "3d", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
+
+
+#: the figures a set's folder keeps when it holds none yet (the real-sand sets' Figs. 6.8, 6.10a and the check)
+SET_FIGURES = ("fig6_8.png", "fig6_10a.png", "criterion_check.png")
 
 
 def refit(name: str, out: Path, n_boot: int, figures: bool):
@@ -67,8 +71,8 @@ def commit(name: str, report: Path, figures: bool) -> None:
     for table in ("correlations.csv", "criterion_check.md", "ensembles.csv"):
         shutil.copy(report / "tables" / table, dest / table)
     if figures:
-        for png in dest.glob("*.png"):
-            shutil.copy(report / "figures" / png.name, png)
+        for name in {p.name for p in dest.glob("*.png")} or SET_FIGURES:
+            shutil.copy(report / "figures" / name, dest / name)
 
 
 def main(argv=None) -> None:
