@@ -3,10 +3,12 @@ folder, no engine): the seed ensembles, the correlations with their seed bootstr
 the criterion's check against every case, and the findings tables.
 
     PYTHONPATH=src python bench/refit_reproduction.py [--study] [--sandlike] [--kfs2d] [--kfs3d]
-        [--out DIR] [--boot N] [--figures] [--commit]
+        [--precision] [--out DIR] [--boot N] [--figures] [--commit]
 
 --study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/;
---kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/.
+--kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/;
+--precision: the study's sequential rerun to E ± 0.1, docs/reproduction/precision/study/
+(campaigns/precision/study_sequential.toml; bench/findings_moved.py reads it against --study).
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
 repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
 (and, with --figures, its figures to docs/reproduction/figures/); any other set's correlations.csv,
@@ -34,7 +36,8 @@ REPRO = ROOT / "docs" / "reproduction"
 SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
         "kfs2d": (REPRO / "real_sand" / "2d", ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"),
-        "kfs3d": (REPRO / "real_sand" / "3d", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml")}
+        "kfs3d": (REPRO / "real_sand" / "3d", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml"),
+        "precision": (REPRO / "precision" / "study", ROOT / "campaigns" / "precision" / "study_sequential.toml")}
 
 
 #: the figures a set's folder keeps when it holds none yet (the real-sand sets' Figs. 6.8, 6.10a and the check)
@@ -81,6 +84,7 @@ def main(argv=None) -> None:
     ap.add_argument("--sandlike", action="store_true")
     ap.add_argument("--kfs2d", action="store_true")
     ap.add_argument("--kfs3d", action="store_true")
+    ap.add_argument("--precision", action="store_true")
     ap.add_argument("--out", default="/tmp/refit")
     ap.add_argument("--boot", type=int, default=99)
     ap.add_argument("--figures", action="store_true")
