@@ -19,7 +19,9 @@ Prints Markdown for docs/reproduction.md:
      box reports, what E divides by) and the specimen's own mobilised friction asin(q/p) of its
      average stress (the Mohr circle in x–z; methods.md §6), with the major principal direction
      from the vertical; the quasi-2D one beside the same discs' biaxial φ_peak at TMD17's state
-     (docs/soils/karlsruhe-fine-sand-2d/verification_tmd17_6seeds.csv).
+     (docs/soils/karlsruhe-fine-sand-2d/verification_tmd17_6seeds.csv);
+  6. the predictions written in group1_kfs_3d.toml's header before its runs, each with what the 3D
+     runs read and its verdict (met / not met / within its interval / not yet).
 With --figure, draws the two cells per friction against θa: E (upper row) and tan δ (lower row) with
 their 95 % intervals, E = 1 and each soil's tan φ as lines (the reading of item 4 at a glance).
 The break of E–θr and the criterion's skill are the report's (`bench/refit_reproduction.py --kfs2d
@@ -37,6 +39,8 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).parent))
 from three_d_comparison import TOL_E, TOL_TAN, e_difference  # noqa: E402
+
+from interphase.analysis.difference import verdict  # noqa: E402
 
 from interphase.analysis.difference import difference  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
@@ -61,11 +65,12 @@ def load(folder: Path) -> dict:
     iface = summ[summ["test"] == "interface"].copy()
     iface["case"] = iface["label"].str.replace(r"-s\d+$", "", regex=True)
     keys = iface.groupby("case")[["rt", "friction_ps", "sw"]].first()
-    cases = table[table["case"].isin(keys.index)].set_index("case").join(keys)
-    cases = cases[cases["rt"].notna()]      # Group 1's teeth; the flat and measured lines have no Rt
+    every = table[table["case"].isin(keys.index)].set_index("case").join(keys)
+    cases = every[every["rt"].notna()]      # Group 1's teeth; the flat and measured lines have no Rt
     cases["face_deg"] = np.degrees(np.arctan2(cases["rt"].astype(float), cases["sw"].astype(float) / 2))
     box = seeds[seeds["test"] == "box"]["peak"].to_numpy(float)
-    return {"cases": cases.reset_index(), "seeds": seeds, "soil": box,
+    return {"cases": cases.reset_index(), "flat": every[every.index.str.contains("-flat-")].reset_index(),
+            "seeds": seeds, "soil": box,
             "tan_phi": table["tan_phi"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan,
             "tan_phi_lo": table["tan_phi_lo"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan,
             "tan_phi_hi": table["tan_phi_hi"].dropna().iloc[0] if table["tan_phi"].notna().any() else math.nan}
@@ -156,6 +161,107 @@ def box_reading(name: str, folder: Path) -> None:
               f"{v['phi_peak_deg']:.1f}° ({v['phi_peak_deg_lo']:.1f}–{v['phi_peak_deg_hi']:.1f}°)")
 
 
+def _rule_e(mu: float, theta_a: float, tan_phi: float) -> float:
+    """The no-fit rule's E: tan(min(φμ + θa, φ)) / tan φ."""
+    phi = math.degrees(math.atan(tan_phi))
+    return math.tan(math.radians(min(math.degrees(math.atan(mu)) + theta_a, phi))) / tan_phi
+
+
+def _in_range(r, lo: float, hi: float) -> str:
+    """A written range against a measured E with its interval: met (the point inside), not met (the
+    whole interval outside), else within its interval (the point outside, the interval reaching in)."""
+    if lo <= r["E"] <= hi:
+        return "met"
+    return "not met" if r["E_hi"] < lo or r["E_lo"] > hi else "within its interval"
+
+
+def predictions_3d(d3: dict, d2: dict | None) -> None:
+    """Each prediction written in campaigns/real_sand/group1_kfs_3d.toml's header before its runs,
+    against the committed 3D tables: what it said, what the runs read, met / not met / not yet. The
+    E–θr break (prediction 3) is the report's fit: `bench/refit_reproduction.py --kfs3d`."""
+    c = d3["cases"]
+    by = c.set_index(["friction_ps", "rt"])
+    tan_phi = d3["tan_phi"]
+    print(f"\n3D, the campaign file's predictions (soil tan φ {tan_phi:.3f}, φ {math.degrees(math.atan(tan_phi)):.1f}°):")
+
+    def have(mu, rt):
+        return (mu, rt) in by.index
+
+    # 1. saturation: the lowest tooth from which every case reads E >= 0.95 with its interval reaching 1
+    said = {0.05: 1.0, 0.2: 0.5, 0.5: 0.5}
+    for mu, rt_said in said.items():
+        g = c[c["friction_ps"] == mu].sort_values("rt")
+        if len(g) < c["rt"].nunique():
+            print(f"- 1. μs {mu:g}: saturated from Rt/D50 {rt_said:g} predicted: not yet ({len(g)} of "
+                  f"{c['rt'].nunique()} teeth)")
+            continue
+        sat = (g["E"] >= 0.95) & (g["E_hi"] >= 1.0)
+        ok = sat[::-1].cummin()[::-1]           # from this tooth on, every one saturated
+        from_rt = g.loc[ok, "rt"].min() if ok.any() else None
+        word = ("met" if from_rt == rt_said else "earlier" if from_rt is not None and from_rt < rt_said else
+                "later") if from_rt is not None else "not reached"
+        print(f"- 1. μs {mu:g}: saturated (E ≥ 0.95, interval reaching 1) from Rt/D50 {rt_said:g} predicted; "
+              f"measured from {from_rt if from_rt is None else f'{from_rt:g}'} ({len(g)} teeth): **{word}**")
+    # 2. the plateau
+    s = c[c["rt"] >= SATURATED_RT]
+    words = pd.Series([_in_range(r, 0.98, 1.10) for _, r in s.iterrows()], dtype=object)
+    word = "met" if (words == "met").all() else "not met" if (words == "not met").any() else "met within the intervals"
+    print(f"- 2. plateau E (Rt/D50 ≥ 1) 0.98–1.10: {len(s)} cases read {s['E'].min():.2f}–{s['E'].max():.2f} "
+          f"(mean {s['E'].mean():.3f}); {words.value_counts().to_dict()}: **{word}**")
+    # 4. the no-fit rule on the low teeth at μs 0.05, and Rt/D50 0.1 at μs 0.5
+    for rt, said_e in ((0.1, 0.22), (0.25, 0.42), (0.5, 0.73)):
+        if have(0.05, rt):
+            r = by.loc[(0.05, rt)]
+            rule = _rule_e(0.05, r["theta_a_deg_92"], tan_phi)
+            print(f"- 4. μs 0.05, Rt/D50 {rt:g}: E within 0.1 of the no-fit rule ({said_e} written, {rule:.2f} on "
+                  f"this soil test): {_e(r)}, off by {r['E'] - rule:+.2f}: **{'met' if abs(r['E'] - rule) <= 0.1 else 'not met'}**")
+    if have(0.5, 0.1):
+        r = by.loc[(0.5, 0.1)]
+        rule = _rule_e(0.5, r["theta_a_deg_92"], tan_phi)
+        print(f"- 4. μs 0.5, Rt/D50 0.1: under the rule ({rule:.2f}): {_e(r)}: "
+              f"**{'met' if r['E_hi'] < rule else 'not met'}** (interval {'under' if r['E_hi'] < rule else 'reaching'} it)")
+    # 6. the two teeth added later
+    said6 = {(0.05, 0.35): (0.3, 0.5), (0.05, 0.7): (0.8, 0.9), (0.2, 0.35): (0.5, 0.7), (0.2, 0.7): (0.8, 1.0),
+             (0.5, 0.35): (0.75, 0.95), (0.5, 0.7): (0.85, 1.05)}
+    for (mu, rt), (lo, hi) in said6.items():
+        if have(mu, rt):
+            r = by.loc[(mu, rt)]
+            word = _in_range(r, lo, hi)
+            print(f"- 6. μs {mu:g}, Rt/D50 {rt:g}: E {lo:g}–{hi:g} (the file's \"~\" read as ± 0.1, its ranges as "
+                  f"written): {_e(r)}: **{word}**")
+        else:
+            print(f"- 6. μs {mu:g}, Rt/D50 {rt:g}: not yet")
+    # 5. against the quasi-2D card on the saturated cases, ± 0.1
+    if d2 is not None:
+        c2 = d2["cases"].set_index(["rt", "friction_ps"])
+        words = []
+        for _, r3 in c.iterrows():
+            key = (r3["rt"], r3["friction_ps"])
+            if key not in c2.index or not (r3["E"] >= 0.95 and r3["E_hi"] >= 1.0):
+                continue
+            r2 = c2.loc[key]
+            p2 = d2["seeds"].loc[d2["seeds"]["case"] == r2["case"], "peak"].to_numpy(float)
+            p3 = d3["seeds"].loc[d3["seeds"]["case"] == r3["case"], "peak"].to_numpy(float)
+            de, lo, hi, _ = e_difference(p2, d2["soil"], p3, d3["soil"])
+            words.append((key, de, verdict(lo, hi, 0.1)))
+        tally = pd.Series([w for *_, w in words]).value_counts().to_dict() if words else {}
+        bad = [f"Rt/D50 {k[0]:g} μs {k[1]:g} ({de:+.2f})" for k, de, w in words if w == "differ"]
+        print(f"- 5. against the quasi-2D card, E within ± 0.1 on the saturated cases and differing on none: "
+              f"{len(words)} saturated cases: {tally}; differ: {', '.join(bad) or 'none'}: "
+              f"**{'met' if not bad and tally.get('agree', 0) == len(words) else 'not met' if bad else 'partly (some undecided)'}**")
+    # 7. the flat
+    for _, r in d3["flat"].sort_values("friction_ps").iterrows():
+        mu = float(r["friction_ps"])
+        tan_d = r["tan_delta"]
+        phimu = math.degrees(math.atan(mu))
+        ok = abs(tan_d - mu) <= 0.01 and abs(r["theta_r_deg"] - phimu) <= 1.0
+        print(f"- 7. flat, μs {mu:g}: tan δ = μs within 0.01 and θr within 1° of φμ {phimu:.1f}°: tan δ "
+              f"{tan_d:.3f} ({r['tan_delta_lo']:.3f}–{r['tan_delta_hi']:.3f}), θr {r['theta_r_deg']:.1f}°, "
+              f"{int(r['seeds'])} seeds: **{'met' if ok else 'not met'}**")
+    if d3["flat"].empty:
+        print("- 7. the flat at the three frictions: not yet")
+
+
 def figure(data: dict, path: Path) -> None:
     """E and tan δ against θa per friction, one series per cell, 95 % intervals as bars."""
     import matplotlib
@@ -210,6 +316,8 @@ def main() -> None:
             box_reading(name, folder)
     if len(data) == 2:
         three_vs_two(data["quasi-2D"], data["3D"])
+    if "3D" in data:
+        predictions_3d(data["3D"], data.get("quasi-2D"))
     if args.figure:
         figure(data, args.figure)
 
