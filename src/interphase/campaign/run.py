@@ -477,22 +477,7 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     measured = [0, 0.0, 0.0]        # finished runs read here: count, their engine seconds, their estimate
     for p in planned:
         folder = campaign.output / p.case_id
-        state = st.folder_status(folder) if folder.exists() else "pending"
-        if state == "done" and indexed.get(p.case_id) == "corrupt":
-            state = "corrupt"
-        if p.case_id in stale:
-            action = "rerun (stale)" if rerun_stale else "skip (stale)"
-        elif state == "pending" and not folder.exists() and p.case_id in record:
-            action = "restore"
-            state = "done"
-        elif state == "done":
-            action = "skip (done)"
-        elif state in st.KEPT_STATUSES:
-            action = f"rerun ({state})" if rerun_failed else f"skip ({state})"
-        elif active and indexed.get(p.case_id) in ("queued", "running"):
-            action = indexed[p.case_id]
-        else:
-            action = "run"
+        state, action = _dry_action(p.case_id, folder, indexed, stale, record, active, rerun_failed, rerun_stale)
         tallies[action] = tallies.get(action, 0) + 1
         n += 1
         left = action in ("run", "queued", "running") or action.startswith("rerun")   # what is left to run
@@ -527,6 +512,27 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     print(f"decks rendered in {root}" if render else "no decks written (`--render` writes the decks of the cases "
           f"that would run, under {root})", file=stream, flush=True)
     return report
+
+
+def _dry_action(cid: str, folder, indexed: dict, stale: dict, record: set, active: bool,
+                rerun_failed: bool, rerun_stale: bool) -> tuple[str, str]:
+    """(state, action) of one planned case in a dry run: what its folder says (the index's corrupt
+    verdict, a restorable row, a live run's queued/running rows taken into account) and what a run
+    would do with it."""
+    state = st.folder_status(folder) if folder.exists() else "pending"
+    if state == "done" and indexed.get(cid) == "corrupt":
+        state = "corrupt"
+    if cid in stale:
+        return state, "rerun (stale)" if rerun_stale else "skip (stale)"
+    if state == "pending" and not folder.exists() and cid in record:
+        return "done", "restore"
+    if state == "done":
+        return state, "skip (done)"
+    if state in st.KEPT_STATUSES:
+        return state, f"rerun ({state})" if rerun_failed else f"skip ({state})"
+    if active and indexed.get(cid) in ("queued", "running"):
+        return state, indexed[cid]
+    return state, "run"
 
 
 #: finished runs of the campaign a dry run reads to scale its estimate (their case.json)
