@@ -252,6 +252,9 @@ def predictions_3d(d3: dict, d2: dict | None) -> None:
     # 7. the flat
     for _, r in d3["flat"].sort_values("friction_ps").iterrows():
         mu = float(r["friction_ps"])
+        if r["seeds"] < 3:
+            print(f"- 7. flat, μs {mu:g}: not yet ({int(r['seeds'])} seed)")
+            continue
         tan_d = r["tan_delta"]
         phimu = math.degrees(math.atan(mu))
         ok = abs(tan_d - mu) <= 0.01 and abs(r["theta_r_deg"] - phimu) <= 1.0
