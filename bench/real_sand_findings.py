@@ -40,6 +40,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).parent))
 from three_d_comparison import TOL_E, TOL_TAN, e_difference  # noqa: E402
 
+from interphase.analysis.criterion import rule_delta  # noqa: E402
 from interphase.analysis.difference import verdict  # noqa: E402
 
 from interphase.analysis.difference import difference  # noqa: E402
@@ -126,9 +127,9 @@ def plateau(name: str, d: dict) -> None:
           f"mean {s['E'].mean():.3f}; intervals above 1: {above}, containing 1: {len(s) - above - below}, below 1: {below}")
 
 
-def three_vs_two(d2: dict, d3: dict) -> None:
-    print("\n| Rt/D50 | μs | E quasi-2D | E 3D | 3D − 2D (95 %) | verdict (± 0.05) | tan δ 3D − 2D (95 %) | verdict (± 0.03) |")
-    print("|---|---|---|---|---|---|---|---|")
+def paired_cases(d2: dict, d3: dict):
+    """(key (Rt/D50, μs), quasi-2D row, 3D row, E 3D − 2D, its 95 % low, high, verdict at ± TOL_E,
+    the two per-seed peak arrays) for every 3D case the quasi-2D cell also ran."""
     c2 = d2["cases"].set_index(["rt", "friction_ps"])
     for _, r3 in d3["cases"].sort_values(["friction_ps", "rt"]).iterrows():
         key = (r3["rt"], r3["friction_ps"])
@@ -137,7 +138,13 @@ def three_vs_two(d2: dict, d3: dict) -> None:
         r2 = c2.loc[key]
         p2 = d2["seeds"].loc[d2["seeds"]["case"] == r2["case"], "peak"].to_numpy(float)
         p3 = d3["seeds"].loc[d3["seeds"]["case"] == r3["case"], "peak"].to_numpy(float)
-        de, lo, hi, v = e_difference(p2, d2["soil"], p3, d3["soil"])
+        yield (key, r2, r3, *e_difference(p2, d2["soil"], p3, d3["soil"]), p2, p3)
+
+
+def three_vs_two(d2: dict, d3: dict) -> None:
+    print("\n| Rt/D50 | μs | E quasi-2D | E 3D | 3D − 2D (95 %) | verdict (± 0.05) | tan δ 3D − 2D (95 %) | verdict (± 0.03) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for key, r2, r3, de, lo, hi, v, p2, p3 in paired_cases(d2, d3):
         t = difference(p2, p3, TOL_TAN)
         print(f"| {key[0]:g} | {key[1]:g} | {_e(r2)} | {_e(r3)} | {de:+.2f} ({lo:+.2f}, {hi:+.2f}) | {v} "
               f"| {t.change:+.3f} ({t.change_lo:+.3f}, {t.change_hi:+.3f}) | {t.verdict} |")
@@ -162,9 +169,8 @@ def box_reading(name: str, folder: Path) -> None:
 
 
 def _rule_e(mu: float, theta_a: float, tan_phi: float) -> float:
-    """The no-fit rule's E: tan(min(φμ + θa, φ)) / tan φ."""
-    phi = math.degrees(math.atan(tan_phi))
-    return math.tan(math.radians(min(math.degrees(math.atan(mu)) + theta_a, phi))) / tan_phi
+    """The no-fit rule's E: tan δ / tan φ with δ = min(φμ + θa, φ) (criterion.rule_delta)."""
+    return math.tan(math.radians(float(rule_delta(mu, theta_a, tan_phi)))) / tan_phi
 
 
 def _in_range(r, lo: float, hi: float) -> str:
@@ -233,17 +239,8 @@ def predictions_3d(d3: dict, d2: dict | None) -> None:
             print(f"- 6. μs {mu:g}, Rt/D50 {rt:g}: not yet")
     # 5. against the quasi-2D card on the saturated cases, ± 0.1
     if d2 is not None:
-        c2 = d2["cases"].set_index(["rt", "friction_ps"])
-        words = []
-        for _, r3 in c.iterrows():
-            key = (r3["rt"], r3["friction_ps"])
-            if key not in c2.index or not (r3["E"] >= 0.95 and r3["E_hi"] >= 1.0):
-                continue
-            r2 = c2.loc[key]
-            p2 = d2["seeds"].loc[d2["seeds"]["case"] == r2["case"], "peak"].to_numpy(float)
-            p3 = d3["seeds"].loc[d3["seeds"]["case"] == r3["case"], "peak"].to_numpy(float)
-            de, lo, hi, _ = e_difference(p2, d2["soil"], p3, d3["soil"])
-            words.append((key, de, verdict(lo, hi, 0.1)))
+        words = [(key, de, verdict(lo, hi, 0.1)) for key, _, r3, de, lo, hi, *_ in paired_cases(d2, d3)
+                 if r3["E"] >= 0.95 and r3["E_hi"] >= 1.0]
         tally = pd.Series([w for *_, w in words]).value_counts().to_dict() if words else {}
         bad = [f"Rt/D50 {k[0]:g} μs {k[1]:g} ({de:+.2f})" for k, de, w in words if w == "differ"]
         print(f"- 5. against the quasi-2D card, E within ± 0.1 on the saturated cases and differing on none: "
