@@ -223,6 +223,26 @@ def test_skill_puts_the_criterion_beside_its_baselines_on_the_same_cases():
     assert s.loc[("fully mobilised", "δ = min(φμ + θa, φ) (no fit)"), "mean_deg"] == 2.0
 
 
+def test_skill_says_whether_the_cases_can_tell_the_criterion_from_a_baseline():
+    """rms_gap: a baseline's rms minus the criterion's with a paired case-bootstrap interval; a
+    baseline missing by 3° more on every case is decided worse, one with the criterion's errors
+    shuffled in sign is not told apart, and the criterion carries no gap of its own."""
+    import pandas as pd
+
+    from interphase.analysis.criterion import skill
+
+    rng = np.random.default_rng(1)
+    e = rng.normal(0, 1, 30)
+    df = pd.DataFrame({"error_deg": e, "error_soil_deg": e + np.sign(e) * 3.0,
+                       "error_rule_deg": -e, "mobilised": np.arange(30) % 2 == 0})
+    s = skill(df).set_index(["subset", "predictor"])
+    soil, rule = s.loc[("all", "δ = φ (the soil's own)")], s.loc[("all", "δ = min(φμ + θa, φ) (no fit)")]
+    assert soil.rms_gap_lo > 0 and soil.rms_gap_lo < soil.rms_gap_deg < soil.rms_gap_hi
+    assert rule.rms_gap_deg == pytest.approx(0.0, abs=1e-12) and rule.rms_gap_lo <= 0 <= rule.rms_gap_hi
+    assert np.isnan(s.loc[("all", "criterion"), "rms_gap_deg"])
+    assert s.loc[("fully mobilised", "δ = φ (the soil's own)"), "n"] == 15
+
+
 def test_the_two_constant_rule_recovers_its_constants():
     import pandas as pd
 

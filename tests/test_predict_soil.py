@@ -69,16 +69,18 @@ def test_simulate_refuses_what_only_the_criterion_uses(tmp_path, capsys):
         assert code == 2 and extra[0] in err and not (tmp_path / "runs").exists(), err
 
 
-def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
-    """soils/karlsruhe-fine-sand-2d.toml names the criterion fitted on its Group 1
-    (docs/reproduction/real_sand/2d/criterion.json): predict --soil answers on a tooth inside the
-    fitted θa range with δ and its interval, from θa–θr lines fitted per friction (ten surfaces a
-    friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs); the
-    shipped Dektak line (θa 2.5° at this D50) is inside the range its flat and measured lines give;
+@pytest.mark.parametrize("card_name, cell", [("karlsruhe-fine-sand-2d.toml", "2d"),
+                                              ("karlsruhe-fine-sand.toml", "3d")])
+def test_each_kfs_card_ships_the_fit_of_its_own_group1(tmp_path, capsys, card_name, cell):
+    """Each Karlsruhe card (quasi-2D and 3D) names the criterion fitted on its own Group 1
+    (docs/reproduction/real_sand/<cell>/criterion.json): predict --soil answers on a tooth inside the
+    fitted θa range with δ and its interval, from θa–θr lines fitted per friction (nine or more
+    surfaces a friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs);
+    the shipped Dektak line (θa 2.5° at this D50) is inside the range the flats give;
     a profile beyond the steepest tooth is refused, naming the file and --simulate."""
     import pandas as pd
 
-    card = ROOT / "soils" / "karlsruhe-fine-sand-2d.toml"
+    card = ROOT / "soils" / card_name
     saw = tmp_path / "saw.txt"
     assert main(["profile", "sawtooth", "--rt", "0.5", "--sw", "2", "--d50", "0.14", "--length", "6",
                  "-o", str(saw)]) == 0
@@ -87,9 +89,9 @@ def test_the_quasi2d_card_ships_the_fit_of_its_own_group1(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["soil"] == str(card) and out["d50_mm"] == 0.14
     fit = json.loads(Path(out["fit"]).read_text())
-    assert fit["source"].startswith("campaign group1-kfs-2d")
+    assert fit["source"].startswith(f"campaign group1-kfs-{cell}")
     assert {"0.05", "0.2", "0.5"} <= set(fit["theta_r"]), fit["reasons"]
-    ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "2d" / "ensembles.csv")
+    ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / cell / "ensembles.csv")
     assert fit["tan_phi"] == pytest.approx(ens["tan_phi"].median(), rel=1e-9)
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
     code, out = _predict(capsys, "--soil", str(card), "--json")  # dektak-1 at D50 0.14 mm: θa 2.5°

@@ -127,8 +127,10 @@ def check_notes(checks: pd.DataFrame) -> list[str]:
                      + (f"; {s['n_without']} case(s) outside the chain's reach" if s["n_without"] else ""))
         notes += _rule_note(fold, g)
         for r in skill(g).itertuples():
+            gap = ("" if math.isnan(r.rms_gap_deg) else f"; rms − the criterion's {r.rms_gap_deg:+.2f}° "
+                   f"({r.rms_gap_lo:+.2f} to {r.rms_gap_hi:+.2f}°, paired case bootstrap)")
             notes.append(f"{fold}, {r.subset}: {r.predictor}: {r.n} cases, rms {r.rms_deg:.2f}°, "
-                         f"{100 * r.within_4deg:.0f} % within 4°")
+                         f"{100 * r.within_4deg:.0f} % within 4°" + gap)
     return notes
 
 
