@@ -63,6 +63,12 @@ def load(save: Path | None, committed: Path = SAVED):
     # a restored run's wall is the machine's that ran it: the price compares walls of runs made here
     summ["ran_here"] = [not is_restored(json.loads((store.case_folder(c) / "case.json").read_text()))
                         for c in summ["case_id"].astype(str)]
+    # a run made for this campaign in an earlier session comes back restored from the committed copy:
+    # it keeps that copy's ran_here (made for this campaign, not the study's 40 x 25 runs)
+    if (committed / "summaries.csv").is_file():
+        kept = pd.read_csv(committed / "summaries.csv", dtype={"case_id": str}, usecols=["case_id", "ran_here"])
+        earlier = set(kept.loc[kept["ran_here"].astype(bool), "case_id"])
+        summ["ran_here"] = summ["ran_here"] | summ["case_id"].astype(str).isin(earlier)
     if save:
         save.mkdir(parents=True, exist_ok=True)
         summ.to_csv(save / "summaries.csv", index=False)
