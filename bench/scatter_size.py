@@ -88,9 +88,10 @@ def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
     for cell, s in summ.groupby(CELL, sort=True):
         seeds = seed_values(s, store)
         here = s["ran_here"].astype(bool) if "ran_here" in s else pd.Series(True, index=s.index)
-        wall = (s.assign(_case=s["label"].str.replace(r"-s\d+$", "", regex=True), _here=here)
-                .groupby("_case").apply(lambda g: g.loc[g["_here"], "elapsed"].mean() if g["_here"].any()
-                                        else g["elapsed"].mean(), include_groups=False))
+        per_case = s.assign(_case=s["label"].str.replace(r"-s\d+$", "", regex=True), _here=here).groupby("_case")
+        wall = per_case.apply(lambda g: g.loc[g["_here"], "elapsed"].mean() if g["_here"].any()
+                              else g["elapsed"].mean(), include_groups=False)
+        wall_here = per_case["_here"].any()
         for case, g in seeds.groupby("case", sort=True):
             test = g["test"].iloc[0]
             for q, col in ((("tan_phi", "peak"),) if test == "box" else (("tan_delta", "peak"), ("E", "E"))):
@@ -98,8 +99,11 @@ def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
                 if v.size < 2:
                     continue
                 sd, lo, hi = sd_interval(v)
+                half = stats.t.ppf(0.975, v.size - 1) * sd / math.sqrt(v.size)
                 rows.append(dict(length=cell[0], height=cell[1], case=case, test=test, quantity=q, seeds=v.size,
-                                 mean=v.mean(), sd=sd, sd_lo=lo, sd_hi=hi, wall_s=float(wall.get(case, math.nan))))
+                                 mean=v.mean(), mean_lo=v.mean() - half, mean_hi=v.mean() + half, sd=sd, sd_lo=lo,
+                                 sd_hi=hi, wall_s=float(wall.get(case, math.nan)),
+                                 wall_here=bool(wall_here.get(case, False))))
     return pd.DataFrame(rows)
 
 
@@ -148,12 +152,15 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     summ, store = load(args.save, args.committed)
     t = price(cell_rows(summ, store))
-    print("| cell [D50] | test | quantity | seeds | mean | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
+    print("| cell [D50] | test | quantity | seeds | mean (95 %) | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in t.sort_values(["surface", "quantity", "length"]).itertuples():
-        print(f"| {r.length:g} × {r.height:g} | {r.surface} | {r.quantity} | {r.seeds} | {r.mean:.3f} "
-              f"| {r.sd:.4f} ({r.sd_lo:.4f}–{r.sd_hi:.4f}) | {r.wall_s:.0f} | {r.sd_ratio:.2f} | {r.wall_ratio:.2f} "
-              f"| {r.price_ratio:.2f} |")
+        print(f"| {r.length:g} × {r.height:g} | {r.surface} | {r.quantity} | {r.seeds} "
+              f"| {r.mean:.3f} ({r.mean_lo:.3f}–{r.mean_hi:.3f}) | {r.sd:.4f} ({r.sd_lo:.4f}–{r.sd_hi:.4f}) "
+              f"| {r.wall_s:.0f}{'' if r.wall_here else ' *'} | {r.sd_ratio:.2f} | {r.wall_ratio:.2f} | {r.price_ratio:.2f} |")
+    if not t["wall_here"].all():
+        print("\n\\* wall of restored runs only, made on another machine: its wall × and price × compare machines, "
+              "not sizes, until a run of that cell and test is made here")
     study_bill(t, args.trials)
 
 
