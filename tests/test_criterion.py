@@ -226,7 +226,7 @@ def test_skill_puts_the_criterion_beside_its_baselines_on_the_same_cases():
 def test_skill_says_whether_the_cases_can_tell_the_criterion_from_a_baseline():
     """rms_gap: a baseline's rms minus the criterion's with a paired case-bootstrap interval; a
     baseline missing by 3° more on every case is decided worse, one with the criterion's errors
-    shuffled in sign is not told apart, and the criterion carries no gap of its own."""
+    of opposite sign is not told apart, and the criterion carries no gap of its own."""
     import pandas as pd
 
     from interphase.analysis.criterion import skill

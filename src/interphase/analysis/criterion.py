@@ -565,10 +565,10 @@ def skill(df: pd.DataFrame, n_boot: int = 4000) -> pd.DataFrame:
     ok = df.dropna(subset=cols)
     full = ok["mobilised"].astype(bool)
     rng = np.random.default_rng(0)
+    rms = lambda e: float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan
     for subset, part in (("all", ok), ("fully mobilised", ok[full]), ("not fully mobilised", ok[~full])):
         err = {c: pd.to_numeric(part[c], errors="coerce").to_numpy(float) for c in cols}
         draws = rng.integers(0, len(part), (n_boot, len(part))) if len(part) else None
-        rms = lambda e: float(np.sqrt(np.mean(e ** 2))) if e.size else math.nan
         for c in cols:
             e = err[c]
             row = {"subset": subset, "predictor": PREDICTORS[c], "n": int(e.size), "rms_deg": rms(e),
