@@ -36,6 +36,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from sequential_bill import project, run_times  # noqa: E402
 from sequential_coverage import populations  # noqa: E402
 
+from interphase.analysis.ensemble import t_interval  # noqa: E402
 from interphase.campaign.compare import seed_values  # noqa: E402
 from interphase.campaign.results import CommittedCurves, write_curves  # noqa: E402
 
@@ -99,9 +100,9 @@ def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
                 if v.size < 2:
                     continue
                 sd, lo, hi = sd_interval(v)
-                half = stats.t.ppf(0.975, v.size - 1) * sd / math.sqrt(v.size)
+                mean_lo, mean_hi = t_interval(v)
                 rows.append(dict(length=cell[0], height=cell[1], case=case, test=test, quantity=q, seeds=v.size,
-                                 mean=v.mean(), mean_lo=v.mean() - half, mean_hi=v.mean() + half, sd=sd, sd_lo=lo,
+                                 mean=v.mean(), mean_lo=mean_lo, mean_hi=mean_hi, sd=sd, sd_lo=lo,
                                  sd_hi=hi, wall_s=float(wall.get(case, math.nan)),
                                  wall_here=bool(wall_here.get(case, False))))
     return pd.DataFrame(rows)
