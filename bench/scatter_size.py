@@ -1,22 +1,23 @@
 """Issue 39 item 2: the seed scatter against the cell's size, and what E ± 0.05 over the study would
 cost with each size (campaigns/precision/scatter_size.toml: the soil test and saw-teeth Rt/D50 0.2
-and 1 at μs 0.5, cells 40 × 25, 60 × 35, 80 × 50 D50, 8 seeds each).
+and 1 at μs 0.5, cells 40 × 25, 60 × 35, 80 × 50 D50, 8 seeds each; campaigns/precision/
+scatter_split.toml: the soil test and Rt/D50 0.2 at the crossed cells 40 × 35 and 60 × 25, which
+tell the height's effect from the length's).
 
-    PYTHONPATH=src python bench/scatter_size.py [--save DIR] [--committed DIR] [--trials N]
+    PYTHONPATH=src python bench/scatter_size.py [--save] [--trials N]
 
-Reads the campaign's runs, or without them the committed copy (docs/reproduction/precision/
-scatter_size/: summaries.csv, curves.parquet, or --committed DIR); --save writes that copy from the
-runs. Per cell
-(box_length_d50 × box_height_d50), per test: the seeds; the per-seed SD of the leave-one-out peak
-(tan φ of the soil test, tan δ of each surface: analysis.ensemble.seed_states as the report reads
-them) with its 95 % chi-square interval, and of E per seed (the seed's interface peak over its
-paired soil test's); the mean wall per run (`elapsed`, one run per core; of the runs made on this
-machine when the table says which, `ran_here`: the restored 40 × 25 runs ran elsewhere); and the price of a
-half-width: the seeds for a 95 % half-width h are n ≈ (t·sd/h)², so a size's core-hours for a given
-h scale as sd² × wall per run (printed relative to 40 × 25).
+Reads each campaign's runs, or without them its committed copy (docs/reproduction/precision/
+scatter_size/ and scatter_split/: summaries.csv, curves.parquet); --save writes those copies from
+the runs. Per cell (box_length_d50 × box_height_d50), per test: the seeds; the per-seed SD of the
+leave-one-out peak (tan φ of the soil test, tan δ of each surface: analysis.ensemble.seed_states as
+the report reads them) with its 95 % chi-square interval, and of E per seed (the seed's interface
+peak over its paired soil test's); the mean wall per run (`elapsed`, one run per core; of the runs
+made on this machine when the table says which, `ran_here`: the restored 40 × 25 runs ran
+elsewhere); and the price of a half-width: the seeds for a 95 % half-width h are n ≈ (t·sd/h)², so
+a size's core-hours for a given h scale as sd² × wall per run (printed relative to 40 × 25).
 Then the study at E ± 0.05 with each size: bench/sequential_bill.py's projection (the sequential
-rule on Normal(case mean, case sd) draws of every physical case of the committed study, cap 24, soil
-on 40 or 80 seeds) with every case's interface sd scaled by the size's measured ratio to 40 × 25
+rule on Normal(case mean, case sd) draws of every physical case of the committed study, cap 24 or
+48 interface seeds, soil on 40 or 80 seeds) with every case's interface sd scaled by the size's measured ratio to 40 × 25
 (mean over the two surfaces), the soil's by its ratio, and each run's wall by the size's ratio.
 A measurement: exit 0 whatever it finds.
 """
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -37,24 +39,30 @@ from sequential_bill import project, run_times  # noqa: E402
 from sequential_coverage import populations  # noqa: E402
 
 from interphase.analysis.ensemble import t_interval  # noqa: E402
-from interphase.campaign.compare import seed_values  # noqa: E402
+from interphase.campaign.compare import compare, seed_values  # noqa: E402
 from interphase.campaign.results import CommittedCurves, write_curves  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-CAMPAIGN = ROOT / "campaigns" / "precision" / "scatter_size.toml"
-SAVED = ROOT / "docs" / "reproduction" / "precision" / "scatter_size"
+#: each campaign and the folder its committed copy lives in
+CAMPAIGNS = {ROOT / "campaigns" / "precision" / f"{name}.toml": ROOT / "docs" / "reproduction" / "precision" / name
+             for name in ("scatter_size", "scatter_split")}
 CELL = ["box_length_d50", "box_height_d50"]
 REFERENCE = (40.0, 25.0)
 
 
-def load(save: Path | None, committed: Path = SAVED):
-    """(summaries, curve store) of the campaign's runs (saved to `save`), else of the committed copy."""
+def load(campaign: Path, committed: Path, save: bool):
+    """(summaries, curve store) of the campaign's runs (saved to `committed` if `save`), else of its
+    committed copy; None when it has neither."""
     try:
         from interphase.campaign.results import open_campaign
 
-        _, store, summ = open_campaign(CAMPAIGN)
+        _, store, summ = open_campaign(campaign)
+        if summ.empty:
+            raise FileNotFoundError("no finished run yet")
     except Exception as exc:      # noqa: BLE001 — no runs here: the committed copy
-        print(f"(no runs of {CAMPAIGN.name}: {str(exc).splitlines()[0]}; reading {committed})")
+        print(f"(no runs of {campaign.name}: {str(exc).splitlines()[0]}; reading {committed})")
+        if not (committed / "summaries.csv").is_file():
+            return None
         return (pd.read_csv(committed / "summaries.csv", dtype={"case_id": str, "pair_id": str}),
                 CommittedCurves(committed / "curves.parquet"))
     import json
@@ -71,9 +79,9 @@ def load(save: Path | None, committed: Path = SAVED):
         earlier = set(kept.loc[kept["ran_here"].astype(bool), "case_id"])
         summ["ran_here"] = summ["ran_here"] | summ["case_id"].astype(str).isin(earlier)
     if save:
-        save.mkdir(parents=True, exist_ok=True)
-        summ.to_csv(save / "summaries.csv", index=False)
-        write_curves(summ, store, save / "curves.parquet")
+        committed.mkdir(parents=True, exist_ok=True)
+        summ.to_csv(committed / "summaries.csv", index=False)
+        write_curves(summ, store, committed / "curves.parquet")
     return summ, store
 
 
@@ -108,6 +116,56 @@ def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def cell_seeds(summ: pd.DataFrame, store) -> pd.DataFrame:
+    """`seed_values` per cell (the labels do not name the cell, and a leave-one-out peak must not mix
+    cells), with the cell's fields and each run's own maximum (`peak_stress_ratio`)."""
+    return pd.concat([seed_values(s, store) for _, s in summ.groupby(CELL)], ignore_index=True).merge(
+        summ[["case_id", "peak_stress_ratio", *CELL]].astype({"case_id": str}), on="case_id")
+
+
+def levels(seeds: pd.DataFrame) -> pd.DataFrame:
+    """One row per (cell, test): the mean of each seed's value by three readings of its strength, each
+    with its 95 % t interval: the leave-one-out peak (the tool's: each seed read where the other
+    seeds' mean curve peaks), the run's own maximum (lifted by the run's noise) and the critical
+    state (mean over the last 40 % of the shear)."""
+    rows = []
+    for (length, height, case), g in seeds.groupby([*CELL, "case"], sort=True):
+        row = dict(length=length, height=height, case=case, test=g["test"].iloc[0], seeds=len(g))
+        for name, col in (("loo_peak", "peak"), ("own_max", "peak_stress_ratio"), ("critical", "critical")):
+            v = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
+            row[name], (row[f"{name}_lo"], row[f"{name}_hi"]) = v.mean(), t_interval(v)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def study_soil():
+    """(summaries, curve store) of the study's own 40 × 25 soil test on all its 40 seeds (the
+    committed sequential study, docs/reproduction/precision/study). Seeds 1–8 are the 40 × 25 cell's
+    here; the 40 say how far those eight stand from the soil's mean, and are the reference a larger
+    cell's soil is compared and priced against (its SD known to ±25 %, not to a factor of two)."""
+    d = ROOT / "docs" / "reproduction" / "precision" / "study"
+    summ = pd.read_csv(d / "summaries.csv", dtype={"case_id": str, "pair_id": str})
+    return summ[summ["test"].eq("box") & summ["gradation"].eq("poly")], CommittedCurves(d / "curves.parquet")
+
+
+def changes(seeds: pd.DataFrame, soil40: pd.DataFrame) -> pd.DataFrame:
+    """Every cell against the study's 40 × 25 (`campaign compare`'s Welch difference and verdict at its
+    tolerances): the soil test against its 40 seeds, each surface against its 8."""
+    ref = seeds[(seeds["box_length_d50"] == REFERENCE[0]) & (seeds["box_height_d50"] == REFERENCE[1])]
+    ref = pd.concat([ref[ref["test"].ne("box")], soil40], ignore_index=True)
+    out = [compare(ref, g).assign(length=cell[0], height=cell[1])
+           for cell, g in seeds.groupby(CELL, sort=True) if cell != REFERENCE]
+    return pd.concat(out, ignore_index=True)
+
+
+def surface_name(case: str) -> str:
+    """'soil', 'rt0.2', 'rt1' or the case as it is (the study's soil row)."""
+    if case.startswith("study"):
+        return case
+    m = re.search(r"rt[\d.]+", case)
+    return m.group(0) if m else "soil"
+
+
 def price(t: pd.DataFrame) -> pd.DataFrame:
     """sd² × wall per run of each row over the same case's at 40 × 25: a size's relative core-hours
     for a given half-width (same quantity, same surface)."""
@@ -126,8 +184,8 @@ def study_bill(t: pd.DataFrame, trials: int) -> None:
     pops = populations()
     times, box_time, today, _ = run_times()
     soils = len({p["b"].tobytes() for p in pops})
-    print("\n| cell [D50] | interface sd × | soil sd × | wall × (interface, soil) | soil seeds | cases reaching ± 0.05 | mean seeds | core-hours |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("\n| cell [D50] | interface sd × | soil sd × | wall × (interface, soil) | cap | soil seeds | cases reaching ± 0.05 | mean seeds | core-hours |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for (length, height), c in t.groupby(["length", "height"], sort=True):
         iface = c[(c["test"] == "interface") & (c["quantity"] == "tan_delta")]
         soil = c[c["test"] == "box"]
@@ -137,22 +195,27 @@ def study_bill(t: pd.DataFrame, trials: int) -> None:
         wa, wb = float(iface["wall_ratio"].mean()), float(soil["wall_ratio"].iloc[0])
         scaled = [dict(p, a=p["a"].mean() + ka * (p["a"] - p["a"].mean()), b=p["b"].mean() + kb * (p["b"] - p["b"].mean()))
                   for p in pops]
-        for m in (40, 80):
-            r = project(scaled, {k: v * wa for k, v in times.items()}, "E", 0.05, 24, m, trials,
+        for cap, m in ((24, 40), (24, 80), (48, 80)):
+            r = project(scaled, {k: v * wa for k, v in times.items()}, "E", 0.05, cap, m, trials,
                         np.random.default_rng(1))
             h = r["hours"] + soils * m * box_time * wb / 3600
-            print(f"| {length:g} × {height:g} | {ka:.2f} | {kb:.2f} | {wa:.2f}, {wb:.2f} | {m} | {r['reached']:.0%} "
-                  f"| {r['seeds']:.1f} | {h:.0f} |")
+            print(f"| {length:g} × {height:g} | {ka:.2f} | {kb:.2f} | {wa:.2f}, {wb:.2f} | {cap} | {m} "
+                  f"| {r['reached']:.0%} | {r['seeds']:.1f} | {h:.0f} |")
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--save", type=Path, default=None)
-    ap.add_argument("--committed", type=Path, default=SAVED)
+    ap.add_argument("--save", action="store_true", help="write each campaign's runs to its committed copy")
     ap.add_argument("--trials", type=int, default=2000)
     args = ap.parse_args(argv)
-    summ, store = load(args.save, args.committed)
-    t = price(cell_rows(summ, store))
+    # a cell belongs to one campaign, so its rows are read on that campaign's own runs and store
+    read = [r for r in (load(c, d, args.save) for c, d in CAMPAIGNS.items()) if r is not None]
+    rows = pd.concat([cell_rows(*r) for r in read], ignore_index=True)
+    # the 40 x 25 soil row from its 40 seeds; its wall stays the one timed here (the study's ran elsewhere)
+    ref = (rows["length"] == REFERENCE[0]) & (rows["height"] == REFERENCE[1]) & rows["test"].eq("box")
+    soil40 = cell_rows(*study_soil()).assign(wall_s=rows.loc[ref, "wall_s"].iloc[0],
+                                             wall_here=rows.loc[ref, "wall_here"].iloc[0])
+    t = price(pd.concat([rows[~ref], soil40], ignore_index=True))
     print("| cell [D50] | test | quantity | seeds | mean (95 %) | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in t.sort_values(["surface", "quantity", "length"]).itertuples():
@@ -162,6 +225,25 @@ def main(argv=None) -> None:
     if not t["wall_here"].all():
         print("\n\\* wall of restored runs only, made on another machine: its wall × and price × compare machines, "
               "not sizes, until a run of that cell and test is made here")
+    seeds = pd.concat([cell_seeds(*r) for r in read], ignore_index=True)
+    soil40 = cell_seeds(*study_soil())
+    print("\nWhat each cell reads (mean of the seeds, 95 % t interval), by three readings of a run's strength:")
+    print("\n| cell [D50] | test | seeds | leave-one-out peak | run's own maximum | critical state |")
+    print("|---|---|---|---|---|---|")
+    lv = pd.concat([levels(seeds), levels(soil40).assign(case="study soil, every seed")], ignore_index=True)
+    for r in lv.sort_values(["test", "case", "length", "height"]).itertuples():
+        cells = " | ".join(f"{getattr(r, k):.3f} ({getattr(r, k + '_lo'):.3f}–{getattr(r, k + '_hi'):.3f})"
+                           for k in ("loo_peak", "own_max", "critical"))
+        print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.seeds} | {cells} |")
+    print("\nEach cell against the study's 40 × 25 (the soil test against its 40 seeds; Welch 95 %, "
+          "`campaign compare`'s tolerances):")
+    print("\n| cell [D50] | test | quantity | 40 × 25 | this cell | change (95 %) | verdict |")
+    print("|---|---|---|---|---|---|---|")
+    for r in changes(seeds, soil40).sort_values(["case", "metric", "length"]).itertuples():
+        if r.metric in ("theta_r_deg", "surface_contacts_per_d50"):
+            continue
+        print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.metric} | {r.ref:.3f} ({r.n_ref}) "
+              f"| {r.value:.3f} ({r.n_value}) | {r.change:+.3f} ({r.change_lo:+.3f} to {r.change_hi:+.3f}) | {r.verdict} |")
     study_bill(t, args.trials)
 
 
