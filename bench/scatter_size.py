@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from sequential_bill import project, run_times  # noqa: E402
 from sequential_coverage import populations  # noqa: E402
 
-from interphase.analysis.ensemble import t_interval  # noqa: E402
+from interphase.analysis.ensemble import ratio_interval, t_interval  # noqa: E402
 from interphase.campaign.compare import compare, seed_values  # noqa: E402
 from interphase.campaign.results import CommittedCurves, write_curves  # noqa: E402
 
@@ -158,6 +158,24 @@ def changes(seeds: pd.DataFrame, soil40: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(out, ignore_index=True)
 
 
+def efficiencies(seeds: pd.DataFrame, soil40: pd.DataFrame) -> pd.DataFrame:
+    """E as the study's tables read it, a ratio of means (tan δ's over the cell's soil test's, with
+    `ratio_interval`), at the peak and at the critical state, per cell and surface; at 40 × 25 over
+    the soil's 40 seeds, so that seeds 1–8's low draw does not stand for the cell."""
+    rows = []
+    for (length, height), c in seeds.groupby(CELL, sort=True):
+        soil = soil40 if (length, height) == REFERENCE else c[c["test"].eq("box")]
+        for case, g in c[c["test"].eq("interface")].groupby("case", sort=True):
+            row = dict(length=length, height=height, case=case)
+            for name, col in (("E", "peak"), ("E_cs", "critical")):
+                a, b = g[col].to_numpy(float), soil[col].to_numpy(float)
+                row[name] = a.mean() / b.mean()
+                row[f"{name}_lo"], row[f"{name}_hi"] = (float(x) for x in ratio_interval(
+                    a.mean(), a.std(ddof=1), a.size, b.mean(), b.std(ddof=1), b.size))
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def surface_name(case: str) -> str:
     """'soil', 'rt0.2', 'rt1' or the case as it is (the study's soil row)."""
     if case.startswith("study"):
@@ -235,6 +253,12 @@ def main(argv=None) -> None:
         cells = " | ".join(f"{getattr(r, k):.3f} ({getattr(r, k + '_lo'):.3f}–{getattr(r, k + '_hi'):.3f})"
                            for k in ("loo_peak", "own_max", "critical"))
         print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.seeds} | {cells} |")
+    print("\nE as the study's tables read it (ratio of the seed means; at 40 × 25 over the soil's 40 seeds):")
+    print("\n| cell [D50] | surface | E at the peak (95 %) | E critical (95 %) |")
+    print("|---|---|---|---|")
+    for r in efficiencies(seeds, soil40).sort_values(["case", "length", "height"]).itertuples():
+        print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.E:.3f} ({r.E_lo:.3f}–{r.E_hi:.3f}) "
+              f"| {r.E_cs:.3f} ({r.E_cs_lo:.3f}–{r.E_cs_hi:.3f}) |")
     print("\nEach cell against the study's 40 × 25 (the soil test against its 40 seeds; Welch 95 %, "
           "`campaign compare`'s tolerances):")
     print("\n| cell [D50] | test | quantity | 40 × 25 | this cell | change (95 %) | verdict |")

@@ -75,8 +75,9 @@ def test_unstated_converged_settings_are_named(tmp_path):
     _, camp = _all_three(tmp_path, "")
     (note,) = [w for w in load_campaign(camp).warnings() if "convergence study" in w]
     assert "device = 'walled'" in note and "chosen: 'periodic'" in note and "ids" in note
+    assert "box_length_d50 = 40.0 (chosen: 60.0" in note and "box_height_d50 = 20.0 (chosen: 35.0" in note
     _, camp = _all_three(tmp_path, 'device = "periodic"\nshear_velocity = 0.02\nshear_modulus = 50e6\n'
-                         "shear_distance = 0.006\nbox_height_d50 = 25\n")
+                         "shear_distance = 0.006\nbox_length_d50 = 40\nbox_height_d50 = 25\n")
     assert load_campaign(camp).warnings() == []
 
 
