@@ -1,8 +1,8 @@
 """Issue 39 item 2: the seed scatter against the cell's size, and what E ± 0.05 over the study would
 cost with each size (campaigns/precision/scatter_size.toml: the soil test and saw-teeth Rt/D50 0.2
 and 1 at μs 0.5, cells 40 × 25, 60 × 35, 80 × 50 D50, 8 seeds each; campaigns/precision/
-scatter_split.toml: the soil test and Rt/D50 0.2 at the crossed cells 40 × 35 and 60 × 25, which
-tell the height's effect from the length's).
+scatter_split.toml: the same three tests at the crossed cells 40 × 35 and 60 × 25, which tell the
+height's effect from the length's).
 
     PYTHONPATH=src python bench/scatter_size.py [--save] [--trials N]
 
@@ -221,28 +221,9 @@ def study_bill(t: pd.DataFrame, trials: int) -> None:
                   f"| {r['reached']:.0%} | {r['seeds']:.1f} | {h:.0f} |")
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--save", action="store_true", help="write each campaign's runs to its committed copy")
-    ap.add_argument("--trials", type=int, default=2000)
-    args = ap.parse_args(argv)
-    # a cell belongs to one campaign, so its rows are read on that campaign's own runs and store
-    read = [r for r in (load(c, d, args.save) for c, d in CAMPAIGNS.items()) if r is not None]
-    rows = pd.concat([cell_rows(*r) for r in read], ignore_index=True)
-    # the 40 x 25 soil row from its 40 seeds; its wall stays the one timed here (the study's ran elsewhere)
-    ref = (rows["length"] == REFERENCE[0]) & (rows["height"] == REFERENCE[1]) & rows["test"].eq("box")
-    soil40 = cell_rows(*study_soil()).assign(wall_s=rows.loc[ref, "wall_s"].iloc[0],
-                                             wall_here=rows.loc[ref, "wall_here"].iloc[0])
-    t = price(pd.concat([rows[~ref], soil40], ignore_index=True))
-    print("| cell [D50] | test | quantity | seeds | mean (95 %) | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for r in t.sort_values(["surface", "quantity", "length"]).itertuples():
-        print(f"| {r.length:g} × {r.height:g} | {r.surface} | {r.quantity} | {r.seeds} "
-              f"| {r.mean:.3f} ({r.mean_lo:.3f}–{r.mean_hi:.3f}) | {r.sd:.4f} ({r.sd_lo:.4f}–{r.sd_hi:.4f}) "
-              f"| {r.wall_s:.0f}{'' if r.wall_here else ' *'} | {r.sd_ratio:.2f} | {r.wall_ratio:.2f} | {r.price_ratio:.2f} |")
-    if not t["wall_here"].all():
-        print("\n\\* wall of restored runs only, made on another machine: its wall × and price × compare machines, "
-              "not sizes, until a run of that cell and test is made here")
+def strengths(read) -> None:
+    """What each cell reads (three readings of strength), E as the study reads it, and each cell
+    against 40 × 25: the tables docs/convergence.md "Cell size" quotes."""
     seeds = pd.concat([cell_seeds(*r) for r in read], ignore_index=True)
     soil40 = cell_seeds(*study_soil())
     print("\nWhat each cell reads (mean of the seeds, 95 % t interval), by three readings of a run's strength:")
@@ -268,6 +249,31 @@ def main(argv=None) -> None:
             continue
         print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.metric} | {r.ref:.3f} ({r.n_ref}) "
               f"| {r.value:.3f} ({r.n_value}) | {r.change:+.3f} ({r.change_lo:+.3f} to {r.change_hi:+.3f}) | {r.verdict} |")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--save", action="store_true", help="write each campaign's runs to its committed copy")
+    ap.add_argument("--trials", type=int, default=2000)
+    args = ap.parse_args(argv)
+    # a cell belongs to one campaign, so its rows are read on that campaign's own runs and store
+    read = [r for r in (load(c, d, args.save) for c, d in CAMPAIGNS.items()) if r is not None]
+    rows = pd.concat([cell_rows(*r) for r in read], ignore_index=True)
+    # the 40 x 25 soil row from its 40 seeds; its wall stays the one timed here (the study's ran elsewhere)
+    ref = (rows["length"] == REFERENCE[0]) & (rows["height"] == REFERENCE[1]) & rows["test"].eq("box")
+    soil40 = cell_rows(*study_soil()).assign(wall_s=rows.loc[ref, "wall_s"].iloc[0],
+                                             wall_here=rows.loc[ref, "wall_here"].iloc[0])
+    t = price(pd.concat([rows[~ref], soil40], ignore_index=True))
+    print("| cell [D50] | test | quantity | seeds | mean (95 %) | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in t.sort_values(["surface", "quantity", "length"]).itertuples():
+        print(f"| {r.length:g} × {r.height:g} | {r.surface} | {r.quantity} | {r.seeds} "
+              f"| {r.mean:.3f} ({r.mean_lo:.3f}–{r.mean_hi:.3f}) | {r.sd:.4f} ({r.sd_lo:.4f}–{r.sd_hi:.4f}) "
+              f"| {r.wall_s:.0f}{'' if r.wall_here else ' *'} | {r.sd_ratio:.2f} | {r.wall_ratio:.2f} | {r.price_ratio:.2f} |")
+    if not t["wall_here"].all():
+        print("\n\\* wall of restored runs only, made on another machine: its wall × and price × compare machines, "
+              "not sizes, until a run of that cell and test is made here")
+    strengths(read)
     study_bill(t, args.trials)
 
 
