@@ -118,22 +118,25 @@ def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
 
 def cell_seeds(summ: pd.DataFrame, store) -> pd.DataFrame:
     """`seed_values` per cell (the labels do not name the cell, and a leave-one-out peak must not mix
-    cells), with the cell's fields and each run's own maximum (`peak_stress_ratio`)."""
+    cells), with the cell's fields, each run's own maximum (`peak_stress_ratio`) and where it is
+    (`shear_disp_at_peak`, m)."""
     return pd.concat([seed_values(s, store) for _, s in summ.groupby(CELL)], ignore_index=True).merge(
-        summ[["case_id", "peak_stress_ratio", *CELL]].astype({"case_id": str}), on="case_id")
+        summ[["case_id", "peak_stress_ratio", "shear_disp_at_peak", *CELL]].astype({"case_id": str}), on="case_id")
 
 
 def levels(seeds: pd.DataFrame) -> pd.DataFrame:
     """One row per (cell, test): the mean of each seed's value by three readings of its strength, each
     with its 95 % t interval: the leave-one-out peak (the tool's: each seed read where the other
     seeds' mean curve peaks), the run's own maximum (lifted by the run's noise) and the critical
-    state (mean over the last 40 % of the shear)."""
+    state (mean over the last 40 % of the shear); and the SD of where the runs peak (mm): a mean
+    curve of seeds that peak apart has a lower, flatter peak."""
     rows = []
     for (length, height, case), g in seeds.groupby([*CELL, "case"], sort=True):
         row = dict(length=length, height=height, case=case, test=g["test"].iloc[0], seeds=len(g))
         for name, col in (("loo_peak", "peak"), ("own_max", "peak_stress_ratio"), ("critical", "critical")):
             v = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
             row[name], (row[f"{name}_lo"], row[f"{name}_hi"]) = v.mean(), t_interval(v)
+        row["peak_at_sd_mm"] = 1e3 * float(np.std(g["shear_disp_at_peak"].to_numpy(float), ddof=1))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -227,13 +230,13 @@ def strengths(read) -> None:
     seeds = pd.concat([cell_seeds(*r) for r in read], ignore_index=True)
     soil40 = cell_seeds(*study_soil())
     print("\nWhat each cell reads (mean of the seeds, 95 % t interval), by three readings of a run's strength:")
-    print("\n| cell [D50] | test | seeds | leave-one-out peak | run's own maximum | critical state |")
-    print("|---|---|---|---|---|---|")
+    print("\n| cell [D50] | test | seeds | leave-one-out peak | run's own maximum | critical state | SD of where runs peak [mm] |")
+    print("|---|---|---|---|---|---|---|")
     lv = pd.concat([levels(seeds), levels(soil40).assign(case="study soil, every seed")], ignore_index=True)
     for r in lv.sort_values(["test", "case", "length", "height"]).itertuples():
         cells = " | ".join(f"{getattr(r, k):.3f} ({getattr(r, k + '_lo'):.3f}–{getattr(r, k + '_hi'):.3f})"
                            for k in ("loo_peak", "own_max", "critical"))
-        print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.seeds} | {cells} |")
+        print(f"| {r.length:g} × {r.height:g} | {surface_name(r.case)} | {r.seeds} | {cells} | {r.peak_at_sd_mm:.2f} |")
     print("\nE as the study's tables read it (ratio of the seed means; at 40 × 25 over the soil's 40 seeds):")
     print("\n| cell [D50] | surface | E at the peak (95 %) | E critical (95 %) |")
     print("|---|---|---|---|")
