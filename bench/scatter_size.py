@@ -91,11 +91,12 @@ def sd_interval(v: np.ndarray) -> tuple[float, float, float]:
     return s, s * math.sqrt((n - 1) / stats.chi2.ppf(0.975, n - 1)), s * math.sqrt((n - 1) / stats.chi2.ppf(0.025, n - 1))
 
 
-def cell_rows(summ: pd.DataFrame, store) -> pd.DataFrame:
-    """One row per (cell, test, quantity): seeds, mean, SD and its interval, wall per run [s]."""
+def cell_rows(summ: pd.DataFrame, all_seeds: pd.DataFrame) -> pd.DataFrame:
+    """One row per (cell, test, quantity): seeds, mean, SD and its interval, wall per run [s]
+    (`all_seeds`: `cell_seeds` of `summ`)."""
     rows = []
     for cell, s in summ.groupby(CELL, sort=True):
-        seeds = seed_values(s, store)
+        seeds = all_seeds[(all_seeds[CELL[0]] == cell[0]) & (all_seeds[CELL[1]] == cell[1])]
         here = s["ran_here"].astype(bool) if "ran_here" in s else pd.Series(True, index=s.index)
         per_case = s.assign(_case=s["label"].str.replace(r"-s\d+$", "", regex=True), _here=here).groupby("_case")
         wall = per_case.apply(lambda g: g.loc[g["_here"], "elapsed"].mean() if g["_here"].any()
@@ -191,7 +192,7 @@ def price(t: pd.DataFrame) -> pd.DataFrame:
     """sd² × wall per run of each row over the same case's at 40 × 25: a size's relative core-hours
     for a given half-width (same quantity, same surface)."""
     t = t.copy()
-    t["surface"] = t["case"].str.extract(r"(rt[\d.]+)", expand=False).fillna("soil")
+    t["surface"] = t["case"].map(surface_name)
     ref = t[(t["length"] == REFERENCE[0]) & (t["height"] == REFERENCE[1])].set_index(["surface", "quantity"])
     key = list(zip(t["surface"], t["quantity"]))
     t["sd_ratio"] = t["sd"].to_numpy() / ref["sd"].reindex(key).to_numpy()
@@ -224,11 +225,10 @@ def study_bill(t: pd.DataFrame, trials: int) -> None:
                   f"| {r['reached']:.0%} | {r['seeds']:.1f} | {h:.0f} |")
 
 
-def strengths(read) -> None:
+def strengths(seeds: pd.DataFrame, soil40: pd.DataFrame) -> None:
     """What each cell reads (three readings of strength), E as the study reads it, and each cell
-    against 40 × 25: the tables docs/convergence.md "Cell size" quotes."""
-    seeds = pd.concat([cell_seeds(*r) for r in read], ignore_index=True)
-    soil40 = cell_seeds(*study_soil())
+    against 40 × 25: the tables docs/convergence.md "Cell size" quotes (`cell_seeds` of the campaigns'
+    runs and of the study's soil test)."""
     print("\nWhat each cell reads (mean of the seeds, 95 % t interval), by three readings of a run's strength:")
     print("\n| cell [D50] | test | seeds | leave-one-out peak | run's own maximum | critical state | SD of where runs peak [mm] |")
     print("|---|---|---|---|---|---|---|")
@@ -261,11 +261,14 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     # a cell belongs to one campaign, so its rows are read on that campaign's own runs and store
     read = [r for r in (load(c, d, args.save) for c, d in CAMPAIGNS.items()) if r is not None]
-    rows = pd.concat([cell_rows(*r) for r in read], ignore_index=True)
+    seeds = [cell_seeds(*r) for r in read]          # the leave-one-out peaks, read once
+    rows = pd.concat([cell_rows(r[0], sd) for r, sd in zip(read, seeds)], ignore_index=True)
+    soil_summ, soil_store = study_soil()
+    soil_seeds = cell_seeds(soil_summ, soil_store)
     # the 40 x 25 soil row from its 40 seeds; its wall stays the one timed here (the study's ran elsewhere)
     ref = (rows["length"] == REFERENCE[0]) & (rows["height"] == REFERENCE[1]) & rows["test"].eq("box")
-    soil40 = cell_rows(*study_soil()).assign(wall_s=rows.loc[ref, "wall_s"].iloc[0],
-                                             wall_here=rows.loc[ref, "wall_here"].iloc[0])
+    soil40 = cell_rows(soil_summ, soil_seeds).assign(wall_s=rows.loc[ref, "wall_s"].iloc[0],
+                                                     wall_here=rows.loc[ref, "wall_here"].iloc[0])
     t = price(pd.concat([rows[~ref], soil40], ignore_index=True))
     print("| cell [D50] | test | quantity | seeds | mean (95 %) | SD per seed (95 %) | wall per run [s] | SD × | wall × | price × (sd² × wall) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -276,7 +279,7 @@ def main(argv=None) -> None:
     if not t["wall_here"].all():
         print("\n\\* wall of restored runs only, made on another machine: its wall × and price × compare machines, "
               "not sizes, until a run of that cell and test is made here")
-    strengths(read)
+    strengths(pd.concat(seeds, ignore_index=True), soil_seeds)
     study_bill(t, args.trials)
 
 
