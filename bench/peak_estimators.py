@@ -14,7 +14,10 @@ tool's `seed_interval` of those values, log scale; S_i(s) is seed i's curve smoo
   cross-fit        the seeds split in two halves; each half's values read at the other half's
                    seed-mean maximum (both ways; for odd n the halves differ by one)
   leave-one-out    S_i at the maximum of the other seeds' mean curve (cross-fitting with n folds;
-                   analysis.ensemble.peak_values, the tool's peak since issue 41)
+                   the tool's peak from issue 41 until issue 39)
+  bagged leave-one-out
+                   S_i averaged over the maxima of 200 bootstrap means of the other seeds
+                   (analysis.ensemble.peak_values, the tool's peak)
   parabola         a parabola fitted by least squares to each seed over ± 1 D50 about the seed-mean
                    curve's maximum, read at the mean parabola's vertex (a smoothed, parametric peak)
   equal counts     (E only) the mean-curve max of the interface seeds over the mean, over random
@@ -31,7 +34,9 @@ the reference is the middle of [leave-one-out(N), mean-curve max(N)], and the br
 is how well it is known; E's reference is the ratio of the two sides' references. On the known-trend
 populations the truth is exact and every trial draws fresh seeds (`--trials`).
 Bias and spread are in % of the reference; coverage is the share of subsets whose 95 % interval
-holds it (for subsets of a finite population, n ≤ N/2, an approximation).
+holds it (for subsets of a finite population, n ≤ N/2, an approximation). A third table needs no
+reference: two DISJOINT subsets of m seeds (independent, as two campaigns would be) give each
+estimator's real sd at m seeds, printed against the standard error its interval claims.
 A measurement: exit 0 whatever it finds.
 """
 
@@ -57,7 +62,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "docs" / "reproduction" / "precision" / "study"
 D50 = 0.7e-3
 WINDOW = PEAK_WINDOW_D50 * D50
-NAMES = ("mean-curve max", "per-seed max", "cross-fit", "leave-one-out", "parabola")
+NAMES = ("mean-curve max", "per-seed max", "cross-fit", "leave-one-out", "bagged leave-one-out", "parabola")
 
 
 # ---- the candidates: S (n seeds × grid) smoothed curves → one value per seed -------------------------
@@ -77,7 +82,16 @@ def cross_fit(S, grid):
 
 
 def leave_one_out(S, grid):
-    return peak_values(S)[0]          # the tool's peak since issue 41 (analysis.ensemble)
+    """S_i at the maximum of the other seeds' mean curve (the tool's peak from issue 41 to issue 39)."""
+    n = len(S)
+    if n == 1:
+        return S.max(1)
+    others = (S.sum(0)[None, :] - S) / (n - 1)
+    return S[np.arange(n), np.argmax(others, axis=1)]
+
+
+def bagged(S, grid):
+    return peak_values(S)[0]          # the tool's peak (analysis.ensemble)
 
 
 def parabola(S, grid):
@@ -108,7 +122,7 @@ def loo_weighted(S, grid, k: float = 1.0):
     return out
 
 
-CANDIDATES = dict(zip(NAMES, (mean_curve_max, per_seed_max, cross_fit, leave_one_out, parabola)))
+CANDIDATES = dict(zip(NAMES, (mean_curve_max, per_seed_max, cross_fit, leave_one_out, bagged, parabola)))
 
 
 def add_weighted() -> None:
@@ -169,6 +183,26 @@ def peak_rows(pop, ref, ns, draws, rng) -> list[dict]:
             e = np.asarray(est)
             rows.append(dict(population=pop["name"], N=len(pop["S"]), n=n, estimator=name,
                              bias=100 * (e.mean() / ref - 1), spread=100 * e.std() / ref, coverage=np.mean(cov)))
+    return rows
+
+
+def split_rows(pop, ms, draws, rng) -> list[dict]:
+    """What an m-seed estimate really scatters by, against what its interval claims: two DISJOINT
+    subsets of m seeds each (independent, as two campaigns would be), their estimates' difference
+    has sd √2·(the estimate's real sd); the claim is the t-interval's standard error s/√m of the
+    per-seed values. ratio > 1: the interval is too narrow by that factor."""
+    rows = []
+    for m in ms:
+        for name, f in CANDIDATES.items():
+            diff, se = [], []
+            for _ in range(draws):
+                p = rng.permutation(len(pop["S"]))
+                a, b = f(pop["S"][p[:m]], pop["grid"]), f(pop["S"][p[m:2 * m]], pop["grid"])
+                diff.append(a.mean() - b.mean())
+                se.append(math.sqrt((a.var(ddof=1) + b.var(ddof=1)) / 2 / m))
+            real = float(np.std(diff)) / math.sqrt(2)
+            rows.append(dict(population=pop["name"], m=m, estimator=name, real=real, claimed=float(np.mean(se)),
+                             ratio=real / float(np.mean(se))))
     return rows
 
 
@@ -303,7 +337,9 @@ def main(argv=None) -> None:
     for p in pops:
         if p["kind"] == "soil":
             label = "well-graded" if "poly" in p["name"] else "uniform"
-            rows += known_rows(p["grid"], noise_bank(p), label, (3, 5, 10), args.trials, rng)
+            rows += known_rows(p["grid"], noise_bank(p), label, (3, 5, 10, 20, 40), args.trials, rng)
+    splits = pd.DataFrame([r for p in pops for r in split_rows(p, [m for m in (3, 5, 10, 20) if 2 * m <= len(p["S"])],
+                                                                  args.draws, rng)])
     erows = []
     soil = {p["pid"]: p for p in pops if p["kind"] == "soil"}
     for p in pops:
@@ -314,10 +350,10 @@ def main(argv=None) -> None:
                             ((3, 10), (3, 20), (5, 20)), args.draws, rng)
     poly = next(p for p in pops if p["kind"] == "soil" and "poly" in p["name"])
     erows += known_e_rows(poly["grid"], noise_bank(poly), ((3, 10), (3, 20), (3, 40), (10, 20)), args.trials // 2, rng)
-    report(pops, refs, pd.DataFrame(rows), pd.DataFrame(erows), time.time() - t0)
+    report(pops, refs, pd.DataFrame(rows), pd.DataFrame(erows), splits, time.time() - t0)
 
 
-def report(pops, refs, peaks: pd.DataFrame, es: pd.DataFrame, seconds: float) -> None:
+def report(pops, refs, peaks: pd.DataFrame, es: pd.DataFrame, splits: pd.DataFrame, seconds: float) -> None:
     print(f"# {platform.node()} {platform.machine()}, python {platform.python_version()}, "
           f"{time.strftime('%Y-%m-%d')}, {seconds:.0f} s")
     print("\n| population | seeds N | reference (bracket) |\n|---|---|---|")
@@ -335,6 +371,15 @@ def report(pops, refs, peaks: pd.DataFrame, es: pd.DataFrame, seconds: float) ->
             for est, r in t.iterrows():
                 print(f"| {est} | " + " | ".join(str(x) for x in r) + " |")
             print()
+    print("\n## real sd of an m-seed peak / its interval's standard error (two disjoint subsets; > 1: too narrow)\n")
+    sp = splits.assign(cell=[f"{r:.2f} ({100 * x:.2f})" for r, x in zip(splits.ratio, splits.real)])
+    for pop, g in sp.groupby("population", sort=False):
+        tb = g.pivot(index="estimator", columns="m", values="cell").reindex([e for e in NAMES if e in set(g.estimator)])
+        print(f"**{pop}** (ratio (real sd, % points of tan))\n\n| estimator | " + " | ".join(f"m = {c}" for c in tb.columns) + " |")
+        print("|---|" + "---|" * len(tb.columns))
+        for est, r in tb.iterrows():
+            print(f"| {est} | " + " | ".join(str(x) for x in r) + " |")
+        print()
     summary = peaks.groupby(["estimator", "n"])["bias"].agg(["mean", lambda v: np.abs(v).max()]).unstack()
     print("mean bias over populations:\n", summary.round(2).to_string())
 

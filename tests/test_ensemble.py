@@ -71,33 +71,61 @@ def _biases(trend, n, trials, seed=7):
 
 
 @pytest.mark.parametrize("shape", ["hump", "plateau"])
-def test_the_peak_reads_the_known_peak_within_one_percent_at_five_seeds_and_a_half_at_three(shape):
-    # the leave-one-out peak reads low by what the others' location costs (measured here −1.5 % and
-    # −1.1 % at 3 seeds, −0.6 % and −0.7 % at 5); the seed-mean curve's maximum, the estimator
+def test_the_peak_reads_the_known_peak_within_two_percent_at_three_seeds_and_one_and_a_half_at_five(shape):
+    # the bagged leave-one-out peak reads low by what the others' location costs (measured here −1.7 %
+    # and −1.1 % at 3 seeds, −1.2 % and −0.9 % at 5); the seed-mean curve's maximum, the estimator
     # before issue 41, reads high (+1.2 % on the hump, +7 % on the plateau at 3 seeds)
     trend = hump(X) if shape == "hump" else PLATEAU
     bias3, old3, cover3 = _biases(trend, 3, 1000)
     bias5, _, _ = _biases(trend, 5, 600)
-    assert -0.018 < bias3 < 0 and abs(bias5) < 0.01
+    assert -0.02 < bias3 < 0 and -0.015 < bias5 < 0
     assert old3 > (0.05 if shape == "plateau" else 0.008)
-    assert 0.85 <= cover3 <= 0.99          # measured 88 % (plateau) and 94 % (hump)
+    assert 0.85 <= cover3 <= 0.99          # measured 89 % on both
 
 
-def test_e_of_three_interface_seeds_over_twenty_soil_seeds_is_within_one_percent():
-    # E divides a 3-seed peak by a 20-seed one; the biases of the two are alike in sign and nearly
-    # cancel (the seed-mean maximum's +7 % over +2 % left E about +4 % high on this pair)
+def _plain_leave_one_out(S):
+    """Each seed read at the maximum of the other seeds' mean curve (the tool's peak before issue 39)."""
+    others = (S.sum(0)[None, :] - S) / (len(S) - 1)
+    return S[np.arange(len(S)), np.argmax(others, axis=1)]
+
+
+def test_bagging_the_locators_halves_the_scatter_on_a_plateau_at_no_cost_in_bias():
+    # on a plateau the maximum of the others' mean hops between near-equal bumps as each seed is left
+    # out, and the seed read there is read where it is low: the plain leave-one-out estimate scatters
+    # twice as much as the bagged one at 20 seeds (measured 3.4 % against 1.7 %), its interval covering
+    # 72 % against 80 %
+    from interphase.analysis.ensemble import _grid, _on_grid, peak_values
+    from interphase.analysis.strength import moving_average
+
+    truth = moving_average(X, PLATEAU, 0.5 * D50).max()
+    rng = np.random.default_rng(11)
+    bagged, plain = [], []
+    for _ in range(120):
+        curves = _noisy_seeds(rng, PLATEAU, 20)
+        grid = _grid(curves, 400)
+        S = np.array([moving_average(grid, r, 0.5 * D50) for r in _on_grid(curves, grid)])
+        bagged.append(peak_values(S)[0].mean() / truth - 1)
+        plain.append(_plain_leave_one_out(S).mean() / truth - 1)
+    assert np.std(bagged) < 0.7 * np.std(plain)
+    assert -0.015 < np.mean(bagged) < 0 and abs(np.mean(bagged) - np.mean(plain)) < 0.005
+
+
+def test_e_of_three_interface_seeds_over_twenty_soil_seeds_is_within_one_and_a_half_percent():
+    # E divides a 3-seed peak by a 20-seed one; the biases of the two are alike in sign and mostly
+    # cancel (measured −1.1 %: −1.7 % over −0.6 %; the seed-mean maximum's +7 % over +2 % left E
+    # about +4 % high on this pair)
     from interphase.analysis.strength import moving_average
 
     truth = moving_average(X, hump(X), 0.5 * D50).max() / moving_average(X, PLATEAU, 0.5 * D50).max()
     rng = np.random.default_rng(5)
     e = [ensemble_efficiency(_noisy_seeds(rng, hump(X), 3), _noisy_seeds(rng, PLATEAU, 20), window=0.5 * D50).peak
          for _ in range(400)]
-    assert abs(np.mean(e) / truth - 1) < 0.01
+    assert abs(np.mean(e) / truth - 1) < 0.015
 
 
 def test_the_peak_does_not_ride_the_noise_of_a_plateau():
     # a plateau at 0.45 with run-to-run noise (sd 0.08): the mean of the per-seed maxima sits far
-    # above it, the leave-one-out peak within its interval of it
+    # above it, the bagged leave-one-out peak within its interval of it
     rng = np.random.default_rng(3)
     curves = _noisy_seeds(rng, np.full_like(X, 0.45), 12, sd=0.08)
     s = ensemble_strength(curves, window=0.5 * D50)

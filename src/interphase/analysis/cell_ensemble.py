@@ -9,7 +9,7 @@ Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compres
   - φ_peak: each seed's own maximum of its smoothed R, as the laboratory reads each specimen, the
     mean of those values mapped through asin((R − 1)/(R + 1)), interval Student t on them; ε1 at
     peak the mean of the seeds' own peak strains. Not the seed-mean curve's maximum, nor the
-    leave-one-out peak of the interface (analysis.ensemble.peak_values): a laboratory specimen of
+    cross-fitted peak of the interface (analysis.ensemble.peak_values): a laboratory specimen of
     millions of grains has no grain-scale fluctuation, and where model specimens' humps peak at
     different strains both read below every specimen's own peak. Measured (bench/triaxial_peak.py,
     82 runs of the Karlsruhe card, a known hump plus real runs' fluctuation, 2–3 seeds): this

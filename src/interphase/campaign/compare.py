@@ -7,9 +7,9 @@ in what the labels do not name (stiffness, speed, box size, rolling friction, da
 such fields (a cell-size study): its runs are split into cells by the named fields' values, and every
 cell is compared with the one where each field has the VALUE given (`compare_cells`). Per-seed
 values, each at its own ensemble's reading (analysis.ensemble):
-  tan_delta, tan_phi        the seed's leave-one-out peak value: its smoothed ratio where the mean
-                            curve of its ensemble's OTHER seeds peaks (analysis.ensemble.peak_values;
-                            interface: the surface; box: the shear plane)
+  tan_delta, tan_phi        the seed's bagged leave-one-out peak value: its smoothed ratio where
+                            bootstrap means of its ensemble's OTHER seeds peak (analysis.ensemble.
+                            peak_values; interface: the surface; box: the shear plane)
   tan_delta_cs, tan_phi_cs  the seed's mean ratio over the last 40 % of the shear
   E, E_cs                   the seed's interface value over its own box test's (pair_id)
   theta_r_deg               θr at the surface at the run's peak snapshot [deg]

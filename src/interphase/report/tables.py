@@ -311,8 +311,8 @@ def ensembles_table(df: pd.DataFrame) -> Table:
     shown["note"] = df["note"].fillna("")
     return Table("ensembles", "Seed ensembles: tan δ, tan φ and E at the peak and the critical state, 95 % intervals",
                  shown.reset_index(drop=True),
-                 ["Peak: leave-one-out, each seed's curve (smoothed over 0.5 D50) read where the other seeds' mean "
-                  "curve peaks, the mean of those values (docs/methods.md); "
+                 ["Peak: bagged leave-one-out, each seed's curve (smoothed over 0.5 D50) read where bootstrap means of "
+                  "the other seeds peak, the mean of those values (docs/methods.md); "
                   "critical state: mean of the last 40 % of the shear; E = tan δ / tan φ of the seed means; θr: mean "
                   "of the seeds' peak-snapshot θr at the surface (ψ, degrees from vertical).", INTERVAL_NOTE],
                  csv=df)
@@ -382,7 +382,7 @@ def results_tables(points: pd.DataFrame) -> list[Table]:
         notes = ["Angles ψ, degrees from vertical (positive toward −x); θa = 0 marks a non-dilative surface."]
         if per_case:
             notes.append("One row per physical case: the mean over its seeds (runs). tan δ, tan φ and E are the seed "
-                         "ensemble's (the leave-one-out peak; E with its box tests' interval), as in the "
+                         "ensemble's (the bagged leave-one-out peak; E with its box tests' interval), as in the "
                          "ensembles table, which also has the critical state; other columns: the mean of the seeds' "
                          "values.")
             notes.append(INTERVAL_NOTE)
