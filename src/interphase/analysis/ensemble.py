@@ -14,14 +14,15 @@ Definitions (shear displacement s [m], stress ratio r(s) [-] = τ/σ on the surf
     +6 % at 3 seeds of the weak soil's plateau, +14 % for the uniform soil. Reading each seed where
     the others put the maximum takes none of its own noise: its expected value is E[S] at a location
     ≤ μ*, so the estimator can only read low, by what the location's scatter costs on the curve. Why
-    bag the locators: read at the single maximum of the others' mean (issue 41's estimator), a seed
-    on a plateau with near-equal bumps is read at whichever bump its own absence leaves highest, i.e.
-    where it is low; the estimate then scatters about twice as much as it need on a plateau at
-    10–40 seeds and its interval covers 63–82 % (the uniform soil's 40 seeds read 0.281 against
-    0.31 from any half of them). Averaging each seed over the others' bootstrap maxima removes that
-    hop. Measured (bench/peak_estimators.py, BENCHMARKS.md "The peak of a seed ensemble"), on known
-    curves carrying the committed runs' own noise: see the table there; the cost is ~0.2–0.5 % more
-    low bias where the curve has a distinct peak. One seed: its own maximum (the reason says so).
+    bag the locators: read at the single maximum of the others' mean, a seed on a plateau with
+    near-equal bumps is read at whichever bump its own absence leaves highest, i.e. where it is low;
+    that estimate scatters up to twice as much on a plateau at 5–40 seeds and its interval covers
+    67–82 % at 10–40 (on 40 uniform soil-test seeds it read tan φ 0.281, under every block of the same
+    seeds, 0.300–0.344). Averaging each seed over the others' bootstrap maxima removes the hop: on
+    known curves with the committed runs' own noise the spread falls by 30–55 % on plateaus and the
+    coverage rises to 80–92 %, for 0.2–1.4 % more low bias on peaked curves at 3–5 seeds
+    (bench/peak_estimators.py; BENCHMARKS.md "Bagged locators"). Every per-seed t-interval here is
+    still too narrow on real data (real sd 1.0–1.7× the claimed standard error). One seed: its own maximum (the reason says so).
   - peak_disp: where the mean curve of all the seeds peaks (a location, not the estimate).
   - critical = mean over seeds of each seed's mean r over s ≥ (1 − critical_fraction)·s_end;
     interval: Student t on the seed means.
@@ -47,7 +48,8 @@ from interphase.analysis.strength import moving_average
 
 CRITICAL_FRACTION = 0.4     # the last 40 % of the shear (3.6–6 mm of the convergence runs' 6 mm)
 GRID_POINTS = 400
-BAGS = 200                  # bootstrap locators per seed (the peak's Monte Carlo sd < 0.1 % of it)
+BAGS = 200                  # bootstrap locators per seed: the peak's Monte Carlo sd is 0.07–0.3 % of it
+                            # on the committed curves (4–40 seeds), far under the seeds' own scatter
 
 
 @dataclass(frozen=True)
