@@ -244,6 +244,14 @@ def _states(curves, window: float, critical_fraction: float, grid_points: int):
     return peaks, at, _critical_states(mat, grid, critical_fraction)
 
 
+def ensemble_states(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
+                    grid_points: int = GRID_POINTS):
+    """(peak values, s_peak [m], critical states) of the seeds `curves`, each with ≥ 2 finite ratios:
+    what `ensemble_strength` and `ensemble_efficiency` summarise (`strength_of_states`,
+    `efficiency_of_states`), for a caller that reads one ensemble more than once."""
+    return _states(curves, window, critical_fraction, grid_points)
+
+
 def _usable(curves) -> list:
     return [c for c in curves if np.isfinite(np.asarray(c[1], float)).sum() >= 2]
 
@@ -257,15 +265,21 @@ def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITI
     if not curves:
         nan = math.nan
         return EnsembleStrength(nan, nan, nan, nan, nan, nan, "no run with a stress ratio")
-    peaks, at, crits = _states(curves, window, critical_fraction, grid_points)
+    return strength_of_states(*_states(curves, window, critical_fraction, grid_points), quantity=quantity)
+
+
+def strength_of_states(peaks, at: float, crits, *, quantity: str | None = None) -> EnsembleStrength:
+    """`ensemble_strength` from its seeds' states (`_states`: peak values, s_peak, critical states),
+    for a caller that reads one ensemble more than once (analysis.ensemble_table)."""
+    n = len(peaks)
     iv = t_interval if quantity is None else (lambda v: values_interval(v, quantity))
     least = 2 if quantity is None else MIN_SEEDS
-    count = "one seed" if len(curves) == 1 else f"{len(curves)} seeds"
-    reason = "" if len(curves) >= least else f"{count}: no interval (run ≥ {MIN_SEEDS} seeds)"
-    if len(curves) == 1:
+    count = "one seed" if n == 1 else f"{n} seeds"
+    reason = "" if n >= least else f"{count}: no interval (run ≥ {MIN_SEEDS} seeds)"
+    if n == 1:
         reason += "; the peak is the run's own maximum (nothing to cross-fit: reads high)"
     return EnsembleStrength(float(np.mean(peaks)), *iv(peaks), float(np.mean(crits)), *iv(crits),
-                            reason, n_seeds=len(curves), peak_disp=at)
+                            reason, n_seeds=n, peak_disp=at)
 
 
 def ensemble_efficiency(interface_curves, box_curves, window: float, *,
@@ -279,7 +293,12 @@ def ensemble_efficiency(interface_curves, box_curves, window: float, *,
         return EnsembleEfficiency(nan, nan, nan, nan, nan, nan, "no run with a stress ratio on a side")
     pa, _, ca = _states(a, window, critical_fraction, grid_points)
     pb, _, cb = _states(b, window, critical_fraction, grid_points)
-    reason = "" if len(a) > 1 and len(b) > 1 else "fewer than two seeds on a side: no interval"
+    return efficiency_of_states(pa, ca, pb, cb)
+
+
+def efficiency_of_states(pa, ca, pb, cb) -> EnsembleEfficiency:
+    """`ensemble_efficiency` from the two sides' seed states (peak values, critical states)."""
+    reason = "" if len(pa) > 1 and len(pb) > 1 else "fewer than two seeds on a side: no interval"
     return EnsembleEfficiency(*_ratio_of_means(pa, pb), *_ratio_of_means(ca, cb), reason)
 
 

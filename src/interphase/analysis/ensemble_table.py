@@ -22,8 +22,9 @@ import math
 import numpy as np
 import pandas as pd
 
-from interphase.analysis.ensemble import (MIN_SEEDS, ensemble_efficiency, ensemble_strength, physical_case,
-                                          physical_ids, seed_peak_states, values_interval)
+from interphase.analysis.ensemble import (MIN_SEEDS, efficiency_of_states, ensemble_efficiency, ensemble_states,
+                                          ensemble_strength, physical_case, physical_ids, strength_of_states,
+                                          values_interval)
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 COLUMNS = ("group", "case", "physical_id", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi",
@@ -87,6 +88,17 @@ def _why_high(e, rows: pd.DataFrame, e_note: float) -> str:
             "(docs/convergence.md); check the case")
 
 
+def _seed_states(ids, curve, window: float, memo: dict):
+    """(the ids of `ids` with a usable curve, their `ensemble_states`, or None without one), computed
+    once per (ids, window)."""
+    key = (tuple(ids), window)
+    if key not in memo:
+        use = [(c, cv) for c, cv in ((c, curve(c)) for c in ids)
+               if cv is not None and np.isfinite(np.asarray(cv[1], float)).sum() >= 2]
+        memo[key] = ([c for c, _ in use], ensemble_states([cv for _, cv in use], window) if use else None)
+    return memo[key]
+
+
 def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd.DataFrame:
     """One row per physical interface case (see the module doc); `note` says why a value is
     missing, and flags E above `e_note` (an interface stronger than its soil's box test)."""
@@ -96,7 +108,7 @@ def ensemble_table(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> pd
 def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> tuple[pd.DataFrame, dict, dict]:
     """(the ensembles table, {case_id: the run's peak state}, box_pools(summaries)) — the second for
     every interface run and box test with a curve: the value its ensemble's peak averages
-    (analysis.ensemble.seed_peak_states), which the correlations' seed bootstrap resamples
+    (analysis.ensemble.seed_peak_states reads the same values), which the correlations' seed bootstrap resamples
     (analysis.correlations.seed_ensemble, given the pools)."""
     if summaries is None or summaries.empty or store is None:
         return pd.DataFrame(columns=COLUMNS), {}, {}
@@ -105,6 +117,7 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
     iface = rows[rows.get("test", pd.Series("", index=rows.index)).eq("interface")]
     cache: dict = {}
     curve = lambda cid: cache[cid] if cid in cache else cache.setdefault(cid, store.curve(cid))
+    memo: dict = {}                    # a soil test's seeds are read once, whatever shares them
     out, states = [], {}
     for (group, name, pid), g in iface.groupby(["group", "_case", "_pid"], sort=True):    # by name, then id
         d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
@@ -112,14 +125,13 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
         ids = [str(c) for c in g["case_id"]]
         paired = {str(p) for p in g.get("pair_id", pd.Series(dtype=object)).dropna().unique()}
         box_ids = sorted({b for p in paired for b in pools.get(p, ())})
-        for group_ids in (ids, box_ids):
-            got = [curve(c) for c in group_ids]
-            states.update({c: float(v) for c, v in zip(group_ids, seed_peak_states(got, window))
-                           if math.isfinite(v)})
-        a = [c for c in (curve(cid) for cid in ids) if c is not None]
-        b = [c for c in (curve(cid) for cid in box_ids) if c is not None]
-        sa, sb = ensemble_strength(a, window, quantity="tan_delta"), ensemble_strength(b, window, quantity="tan_phi")
-        e = ensemble_efficiency(a, b, window)
+        (ids_a, st_a), (ids_b, st_b) = (_seed_states(x, curve, window, memo) for x in (ids, box_ids))
+        for got, st in ((ids_a, st_a), (ids_b, st_b)):
+            states.update({c: float(v) for c, v in zip(got, st[0] if st else ()) if math.isfinite(v)})
+        a, b = ids_a, ids_b
+        sa = strength_of_states(*st_a, quantity="tan_delta") if st_a else ensemble_strength([], window)
+        sb = strength_of_states(*st_b, quantity="tan_phi") if st_b else ensemble_strength([], window)
+        e = efficiency_of_states(st_a[0], st_a[2], st_b[0], st_b[2]) if st_a and st_b else ensemble_efficiency([], [], window)
         if len(a) < MIN_SEEDS or len(b) < MIN_SEEDS:      # E's interval needs as many seeds as its sides'
             e = dataclasses.replace(e, peak_lo=math.nan, peak_hi=math.nan, critical_lo=math.nan,
                                     critical_hi=math.nan)
