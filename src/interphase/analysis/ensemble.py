@@ -121,7 +121,8 @@ def peak_values(smooth: np.ndarray, bags: int = BAGS) -> tuple[np.ndarray, int]:
     if not ok.all():
         with np.errstate(invalid="ignore", divide="ignore"):
             located = located / (weights @ ok.astype(float))
-    where = np.argmax(np.where(np.isfinite(located), located, -np.inf), axis=1).reshape(n, bags)
+        located = np.where(np.isfinite(located), located, -np.inf)
+    where = np.argmax(located, axis=1).reshape(n, bags)
     with np.errstate(invalid="ignore"):
         return np.nanmean(smooth[np.arange(n)[:, None], where], axis=1), at
 
