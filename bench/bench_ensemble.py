@@ -8,7 +8,6 @@ BENCHMARKS.md. Synthetic smoothed curves on the tool's 400-point grid; best of 5
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -18,18 +17,10 @@ from interphase.analysis.ensemble import peak_values
 from interphase.analysis.ensemble_table import ensemble_table
 
 sys.path.insert(0, str(Path(__file__).parent))
+from bench_analysis import best  # noqa: E402
 from sequential_coverage import _Curves  # noqa: E402
 
 STUDY = Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "precision" / "study"
-
-
-def best(fn, repeat: int = 5) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> None:
@@ -37,7 +28,7 @@ def main() -> None:
     print("| step | seeds | wall [ms] |\n|---|---|---|")
     for n in (3, 5, 10, 20, 40):
         S = 0.35 + 0.05 * rng.standard_normal((n, 400)).cumsum(1) / 20
-        print(f"| peak_values | {n} | {1e3 * best(lambda: peak_values(S)):.1f} |")
+        print(f"| peak_values | {n} | {1e3 * best(lambda: peak_values(S), 5):.1f} |")
     summ = pd.read_csv(STUDY / "summaries.csv")
     store = _Curves(STUDY / "curves.parquet")
     print(f"| ensemble_table, the sequential study ({len(summ)} runs, "
