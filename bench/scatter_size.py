@@ -127,8 +127,8 @@ def cell_seeds(summ: pd.DataFrame, store) -> pd.DataFrame:
 
 def levels(seeds: pd.DataFrame) -> pd.DataFrame:
     """One row per (cell, test): the mean of each seed's value by three readings of its strength, each
-    with its 95 % t interval: the leave-one-out peak (the tool's: each seed read where the other
-    seeds' mean curve peaks), the run's own maximum (lifted by the run's noise) and the critical
+    with its 95 % t interval: the leave-one-out peak (the tool's bagged one: each seed read where
+    bootstrap means of the other seeds peak, analysis.ensemble.peak_values), the run's own maximum (lifted by the run's noise) and the critical
     state (mean over the last 40 % of the shear); and the SD of where the runs peak (mm): a mean
     curve of seeds that peak apart has a lower, flatter peak."""
     rows = []

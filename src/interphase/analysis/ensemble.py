@@ -253,8 +253,13 @@ def ensemble_states(curves, window: float, *, critical_fraction: float = CRITICA
     return _states(curves, window, critical_fraction, grid_points)
 
 
+def usable(curve) -> bool:
+    """Whether a (shear_disp, ratio) curve can join an ensemble: present, with ≥ 2 finite ratios."""
+    return curve is not None and np.isfinite(np.asarray(curve[1], float)).sum() >= 2
+
+
 def _usable(curves) -> list:
-    return [c for c in curves if np.isfinite(np.asarray(c[1], float)).sum() >= 2]
+    return [c for c in curves if usable(c)]
 
 
 def ensemble_strength(curves, window: float, *, critical_fraction: float = CRITICAL_FRACTION,
@@ -332,7 +337,7 @@ def seed_states(curves, window: float, *, critical_fraction: float = CRITICAL_FR
     means are `ensemble_strength(curves, window)`'s peak and critical; resampling them is how
     `ensemble_efficiency` and the correlations' seed bootstrap vary the strength."""
     peaks, crits = np.full(len(curves), np.nan), np.full(len(curves), np.nan)
-    ok = [i for i, c in enumerate(curves) if c is not None and np.isfinite(np.asarray(c[1], float)).sum() >= 2]
+    ok = [i for i, c in enumerate(curves) if usable(c)]
     if ok:
         p, _, c = _states([curves[i] for i in ok], window, critical_fraction, grid_points)
         peaks[ok], crits[ok] = p, c

@@ -24,7 +24,7 @@ import pandas as pd
 
 from interphase.analysis.ensemble import (MIN_SEEDS, efficiency_of_states, ensemble_efficiency, ensemble_states,
                                           ensemble_strength, physical_case, physical_ids, strength_of_states,
-                                          values_interval)
+                                          usable, values_interval)
 from interphase.analysis.strength import PEAK_WINDOW_D50
 
 COLUMNS = ("group", "case", "physical_id", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi",
@@ -93,8 +93,7 @@ def _seed_states(ids, curve, window: float, memo: dict):
     once per (ids, window)."""
     key = (tuple(ids), window)
     if key not in memo:
-        use = [(c, cv) for c, cv in ((c, curve(c)) for c in ids)
-               if cv is not None and np.isfinite(np.asarray(cv[1], float)).sum() >= 2]
+        use = [(c, cv) for c, cv in ((c, curve(c)) for c in ids) if usable(cv)]
         memo[key] = ([c for c, _ in use], ensemble_states([cv for _, cv in use], window) if use else None)
     return memo[key]
 
@@ -128,19 +127,18 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
         (ids_a, st_a), (ids_b, st_b) = (_seed_states(x, curve, window, memo) for x in (ids, box_ids))
         for got, st in ((ids_a, st_a), (ids_b, st_b)):
             states.update({c: float(v) for c, v in zip(got, st[0] if st else ()) if math.isfinite(v)})
-        a, b = ids_a, ids_b
         sa = strength_of_states(*st_a, quantity="tan_delta") if st_a else ensemble_strength([], window)
         sb = strength_of_states(*st_b, quantity="tan_phi") if st_b else ensemble_strength([], window)
         e = efficiency_of_states(st_a[0], st_a[2], st_b[0], st_b[2]) if st_a and st_b else ensemble_efficiency([], [], window)
-        if len(a) < MIN_SEEDS or len(b) < MIN_SEEDS:      # E's interval needs as many seeds as its sides'
+        if len(ids_a) < MIN_SEEDS or len(ids_b) < MIN_SEEDS:      # E's interval needs as many seeds as its sides'
             e = dataclasses.replace(e, peak_lo=math.nan, peak_hi=math.nan, critical_lo=math.nan,
                                     critical_hi=math.nan)
         th = _mean_interval(pd.to_numeric(g.get("theta_r_surface_deg"), errors="coerce"), "theta_r_surface_deg")
         notes = []
-        if not b:
+        if not ids_b:
             notes.append("no finished box test: E undefined")
-        if len(a) < MIN_SEEDS or len(b) < MIN_SEEDS:
-            notes.append(f"fewer than {MIN_SEEDS} seeds ({len(a)} interface, {len(b)} box): no interval")
+        if len(ids_a) < MIN_SEEDS or len(ids_b) < MIN_SEEDS:
+            notes.append(f"fewer than {MIN_SEEDS} seeds ({len(ids_a)} interface, {len(ids_b)} box): no interval")
         if math.isfinite(e.peak) and e.peak > e_note:
             notes.append(_why_high(e, g, e_note))
         out.append(dict(group=group, case=name, physical_id=pid, seeds=sa.n_seeds, box_seeds=sb.n_seeds,
