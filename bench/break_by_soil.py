@@ -3,7 +3,7 @@
     PYTHONPATH=src python bench/break_by_soil.py
 
 From the committed tables (no runs folder, no engine). For each soil with committed curves (the
-study's, docs/reproduction/; the sand-like soil's, docs/reproduction/group1_sandlike/): Group 1's
+study's, its sequential run in docs/reproduction/precision/study/; the sand-like soil's, docs/reproduction/group1_sandlike/): Group 1's
 saw-teeth (Sw/D50 2, no flats) at μs 0.05 with well-graded grains, one point per RUN: x = its θr at
 the surface, y = its leave-one-out peak tan δ (the run read where the other seeds of its case peak,
 analysis.ensemble.peak_values: the value the seed ensemble averages) over the soil's ENSEMBLE tan φ
@@ -37,7 +37,7 @@ from interphase.analysis.correlations import fit_plateau  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_tables  # noqa: E402
 
 REPRO = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
-SOILS = {"the study's (rolling 0.1)": (REPRO, "group1"),
+SOILS = {"the study's (rolling 0.1)": (REPRO / "precision" / "study", "group1"),
          "sand-like (dense, rolling 0.6)": (REPRO / "group1_sandlike", None)}
 
 

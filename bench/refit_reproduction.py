@@ -10,8 +10,10 @@ the criterion's check against every case, and the findings tables.
 --precision: the study's sequential rerun to E ± 0.1, docs/reproduction/precision/study/
 (campaigns/precision/study_sequential.toml; bench/findings_moved.py reads it against --study).
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
-repository keeps them: the study's criterion.json to src/interphase/data/criterion_reproduction.json
-(and, with --figures, its figures to docs/reproduction/figures/); any other set's correlations.csv,
+repository keeps them: the sequential study's (--precision) criterion.json to
+src/interphase/data/criterion_reproduction.json and, with --figures, its figures to
+docs/reproduction/figures/; every set but --study (whose ensembles.csv bench/ensembles_tables.py
+writes) its correlations.csv,
 criterion.json, criterion_check.md, ensembles.csv (and, with --figures, the figures its folder
 already holds, or SET_FIGURES where it holds none) to its folder: every committed number then comes from the committed curves (float32;
 a report on the runs themselves differs from them in the fourth digit).
@@ -62,12 +64,18 @@ def refit(name: str, out: Path, n_boot: int, figures: bool):
     return out / name
 
 
+#: the set whose fits the package ships and whose figures docs/reproduction/figures/ holds: the
+#: sequential study (every case to E ± 0.1), which holds the 3-seed study's runs too
+SHIPPED = "precision"
+
+
 def commit(name: str, report: Path, figures: bool) -> None:
-    if name == "study":
+    if name == SHIPPED:
         shutil.copy(report / "criterion.json", ROOT / "src" / "interphase" / "data" / "criterion_reproduction.json")
         if figures:
             for png in (REPRO / "figures").glob("*.png"):
                 shutil.copy(report / "figures" / png.name, png)
+    if name == "study":                      # its ensembles.csv is bench/ensembles_tables.py's
         return
     dest = SETS[name][0]
     shutil.copy(report / "criterion.json", dest / "criterion.json")

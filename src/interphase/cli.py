@@ -765,7 +765,7 @@ def _cmd_predict(args) -> int:
     elif soil is not None:
         print(f"fits: the soil card {soil}'s own, {fit} ({model.source})")
     elif args.fit is None:
-        print("fits: the reproduction's (campaigns/study.toml, seed-bootstrap 95 % intervals; docs/reproduction.md)")
+        print("fits: the reproduction's (campaigns/precision/study_sequential.toml, seed-bootstrap 95 % intervals; docs/reproduction.md)")
     if args.tan_phi is None and not model.is_default:
         print(f"note: tan φ = {model.tan_phi:.3f} is the fitted campaign's simulated soil; give --tan-phi for yours")
     print(f"profile     {args.profile}  (D50 = {args.d50:g} mm, tan φμ = {args.friction:g}, source: {p.source})")

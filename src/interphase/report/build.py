@@ -606,9 +606,9 @@ def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel
                                f"campaign {campaign.name}")
 
 
-#: the criterion fitted on the reproduction (campaigns/study.toml, docs/reproduction.md): `campaign
-#: report campaigns/study.toml` writes it as <report>/criterion.json; it is copied here when the
-#: committed summaries are updated
+#: the criterion fitted on the reproduction (campaigns/precision/study_sequential.toml, the study's
+#: cases to E ± 0.1; docs/reproduction.md): `bench/refit_reproduction.py --precision --commit` writes
+#: it here from the committed summaries and curves
 REPRODUCTION = Path(__file__).resolve().parents[1] / "data" / "criterion_reproduction.json"
 
 
