@@ -5,7 +5,7 @@
 Reads the campaign's finished runs (or, without runs, the committed copy in DIR: summaries.csv and
 curves.parquet) and prints three Markdown tables for docs/3d.md:
   1. per Rt/D50: tan δ (peak) and E with their 95 % seed intervals in the quasi-2D and the 3D cell,
-     the study's 2D cell (40 × 25 D50, docs/reproduction/ensembles.csv) beside them, and 3D − 2D with
+     the study's 2D cell (40 × 25 D50, the sequential study: docs/reproduction/precision/study/ensembles.csv) beside them, and 3D − 2D with
      its interval and verdict (analysis.difference: Welch on the seeds' peak states, tolerance 0.03;
      E through the delta method on the log of each side's ratio of means, tolerance 0.05; E's
      difference also at 90 %);
@@ -37,7 +37,7 @@ from interphase.campaign.compare import seed_values
 ROOT = Path(__file__).resolve().parents[1]
 CAMPAIGN = ROOT / "campaigns" / "three_d" / "compare_2d3d.toml"
 SAVED = ROOT / "docs" / "reproduction" / "three_d"
-STUDY = ROOT / "docs" / "reproduction" / "ensembles.csv"
+STUDY = ROOT / "docs" / "reproduction" / "precision" / "study" / "ensembles.csv"
 TOL_TAN, TOL_E = 0.03, 0.05
 
 
