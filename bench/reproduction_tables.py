@@ -51,12 +51,18 @@ def _iv(row, col: str, nd: int = 2) -> str:
     return f"{_num(row[col], nd)} ({_num(row[col + '_lo'], nd)}–{_num(row[col + '_hi'], nd)})"
 
 
-def _theta_r(row, with_interval: bool) -> str:
-    return (f"{row['theta_r_deg']:.1f} ({row['theta_r_lo']:.1f}–{row['theta_r_hi']:.1f})" if with_interval
-            else f"{row['theta_r_deg']:.1f}")
+#: each quantity's row name; E and tan δ print with their 95 % intervals, θr with one where asked
+NAMES = {"E": "E", "E_cs": "E, critical state", "tan_delta": "tan δ", "theta_r": "θr [°]"}
 
 
-def grid(e: pd.DataFrame, key: str, label: str, rows: list[tuple[str, str]], theta_r_iv: bool) -> str:
+def _cell(row, what: str, theta_r_iv: bool) -> str:
+    if what == "theta_r":
+        return (f"{row['theta_r_deg']:.1f} ({row['theta_r_lo']:.1f}–{row['theta_r_hi']:.1f})" if theta_r_iv
+                else f"{row['theta_r_deg']:.1f}")
+    return _iv(row, what, 3 if what == "tan_delta" else 2)
+
+
+def grid(e: pd.DataFrame, key: str, label: str, rows: list[tuple[str, float]], theta_r_iv: bool) -> str:
     """One group's table: a column per `key` value, a row per (quantity, friction) of `rows`."""
     cols = sorted(e[key].unique(), key=lambda v: (isinstance(v, str), v))
     out = [f"| {label} | " + " | ".join(f"{c:g}" if isinstance(c, float) else str(c) for c in cols) + " |",
@@ -64,18 +70,9 @@ def grid(e: pd.DataFrame, key: str, label: str, rows: list[tuple[str, str]], the
     first = e.drop_duplicates(key).set_index(key)
     out.append("| θa (> 92°) [°] | " + " | ".join(_num(first.loc[c, "theta_a_deg_92"], 1) for c in cols) + " |")
     for what, mu in rows:
-        sub = e[e["mu"] == float(mu)].set_index(key)
-        cells = []
-        for c in cols:
-            if c not in sub.index:
-                cells.append("–")
-                continue
-            r = sub.loc[c]
-            cells.append({"E": lambda: _iv(r, "E"), "E_cs": lambda: _iv(r, "E_cs"),
-                          "tan_delta": lambda: _iv(r, "tan_delta", 3),
-                          "theta_r": lambda: _theta_r(r, theta_r_iv)}[what]())
-        name = {"E": "E", "E_cs": "E, critical state", "tan_delta": "tan δ", "theta_r": "θr [°]"}[what]
-        out.append(f"| {name}, μs {mu} | " + " | ".join(cells) + " |")
+        sub = e[e["mu"] == mu].set_index(key)
+        cells = [_cell(sub.loc[c], what, theta_r_iv) if c in sub.index else "–" for c in cols]
+        out.append(f"| {NAMES[what]}, μs {mu} | " + " | ".join(cells) + " |")
     return "\n".join(out)
 
 
