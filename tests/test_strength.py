@@ -141,6 +141,22 @@ def test_shear_band_from_particles():
     assert band == pytest.approx(0.9 * 10e-3 / d, abs=1e-9)
 
 
+def test_shear_band_across_a_periodic_boundary():
+    """Grains that cross the cell's x boundary between the snapshots jump by one period; read with
+    the period they count with their true displacement, and the band is the one without the jump."""
+    d, L = 0.5e-3, 40e-3
+    p = particles_linear(T=10e-3, d=d)
+    late = p["snapshot"] == 1
+    crossed = late & (p["id"] % 7 == 0)              # every 7th grain wrapped to the other side
+    p.loc[crossed, "x"] += L
+    wrapped = st.displacement_profile(p, 0, 1, z_ref=0.0)
+    band = st.shear_band_thickness(wrapped["z"], wrapped["U"], 0.0, d)
+    assert not band == pytest.approx(0.9 * 10e-3 / d, abs=1e-3)      # the jump corrupts the profile
+    prof = st.displacement_profile(p, 0, 1, z_ref=0.0, period=L)
+    band = st.shear_band_thickness(prof["z"], prof["U"], 0.0, d)
+    assert band == pytest.approx(0.9 * 10e-3 / d, abs=1e-9)
+
+
 def test_shear_band_degenerate():
     z = np.linspace(0, 1, 11)
     t, why = st.shear_band(z, np.full(11, 0.05), 0.0, 0.1)

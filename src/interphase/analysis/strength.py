@@ -246,10 +246,13 @@ def shear_rate_from_profile(particles: pd.DataFrame, snapshots=None, bin_height:
 
 
 def displacement_profile(particles: pd.DataFrame, snapshot0, snapshot1, z_ref: float,
-                         bin_height: float | None = None, far_d50: float = FAR_LAYER_D50) -> pd.DataFrame:
+                         bin_height: float | None = None, far_d50: float = FAR_LAYER_D50,
+                         period: float | None = None) -> pd.DataFrame:
     """Normalised x-displacement profile U(z) between two snapshots (see the module doc), in layers of
     `bin_height` [m] (default: the median grain diameter) from z_ref [m] up; z is each grain's height
     at snapshot0. u_far: mean u of the grains within `far_d50` diameters of the highest centre.
+    `period` [m]: the cell's length when x is periodic; a grain that crossed the boundary between
+    the snapshots is brought back by it (minimum image: valid while no grain moves half a period).
     Columns z [m], U [-], count. Empty if the snapshots share no grain or Δs = 0."""
     require_columns(particles, ("snapshot", "shear_disp", "id", "x", "z", "radius"), "Particles")
     a = particles[particles["snapshot"].to_numpy() == snapshot0]
@@ -265,6 +268,8 @@ def displacement_profile(particles: pd.DataFrame, snapshot0, snapshot1, z_ref: f
     d = 2.0 * float(np.median(m["radius"]))
     h = float(bin_height) if bin_height else d
     u = (m["x1"] - m["x0"]).to_numpy()
+    if period:
+        u = u - period * np.round(u / period)
     z = m["z"].to_numpy()
     far = z >= z.max() - far_d50 * d
     U = (u - u[far].mean()) / (-ds)

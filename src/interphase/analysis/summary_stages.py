@@ -269,7 +269,8 @@ def shear_band(case, particles, ps: PeakSnapshot, reg: Region) -> Stage:
             out.reasons = dict.fromkeys(BAND_KEYS, "fewer than two particle snapshots")
         else:
             d50, z_ref = case.d50, reg.rect[2]
-            prof = st.displacement_profile(particles, s0, s1, z_ref)
+            prof = st.displacement_profile(particles, s0, s1, z_ref,
+                                           period=case.box_length if case.periodic else None)
             band, why = st.shear_band(prof["z"], prof["U"], z_ref, d50)
             out.values["shear_band_d50"] = band
             if why:
