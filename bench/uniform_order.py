@@ -1,0 +1,323 @@
+"""Order of the grains in the soil test ("box") and on rough teeth: does crystallisation of the
+uniform discs explain why their soil test reads weaker than the same grains on teeth?
+
+What it measures, per finished run folder (particles.parquet, case.json, summary.json of a
+`campaign run` of campaigns/checks/uniform_order.toml), at the start of the shear (snapshot 0) and at
+its end (the last snapshot, the critical state):
+  - |ψ6| per grain [-], the 2D bond-orientational (hexatic) order: |mean over neighbours of
+    exp(6iθ)|, θ the bond's angle in the x–z plane, neighbours the edges of a Delaunay triangulation
+    (scipy.spatial) of the grain centres with their periodic images at x ± L (L the cell length), so
+    no grain loses a neighbour at the periodic boundary. Edges longer than 2 d_max (the hull's
+    spurious edges at the free top) are dropped. 1 = a triangular lattice, ~0.3–0.5 a disordered
+    packing. Reported per zone: the mean |ψ6| and the fraction of grains with |ψ6| > 0.7.
+    Also the lattice's orientation arg(ψ6)/6 [°]: the share of ordered grains whose rows lie within
+    ±7.5° of the shear direction (horizontal rows, the planes a crystal slips on in this shear).
+  - the normalised x-displacement profile U(h) [-] between two snapshots (x unwrapped across the
+    periodic boundary), by layers 1 D50 thick of the height h above the boundary [D50]; U = 1 moves
+    with the boundary (surface or frozen bed, which travel −x), U = 0 with the top (the mean of the
+    grains within 2 D50 of the highest centre). The boundary is the teeth's tips (max z of
+    surface.stl) on the interface, the top of the frozen bed (max z + r of its grains, the lowest
+    lattice row, which never moves in z) in the box. From U: the band top h_band [D50] = the first
+    height at which U falls to 0.1 (the tool's BAND_LEVEL), and the slip at the boundary
+    1 − U(first layer h ∈ [0, 1)) [-] (1: the soil slides on the boundary, 0: the first layer moves
+    with it). Start: snapshots 0 → 2 (0–1 mm); end: the last two intervals (5–6 mm).
+  - zones for |ψ6|: "band" = grains with h ∈ [0.5, max(h_band, 2)] at the end-of-shear interval (the
+    first half layer is left out: on teeth those grains touch the surface and lose a neighbour to it);
+    "outside" = h from that top + 1 D50 up to 3 D50 below the highest grain top (clear of the platen);
+    also the fixed layers h ∈ [0.5, 2), [2, 5), [5, top − 3 D50) so start and end compare like with like.
+  - the strength values of the run as the tool summarised them (peak_stress_ratio,
+    residual_stress_ratio, solid_fraction, a_region = contact-normal/force fabric anisotropy in the
+    region at the peak snapshot, shear_band_d50 and its reason).
+Means over seeds are reported with their 95 % Student-t interval (interphase.analysis.ensemble
+.t_interval); differences box − teeth with a Welch 95 % interval.
+
+Run (after `campaign run campaigns/checks/uniform_order.toml --runs RUNS`):
+    PYTHONPATH=src .venv/bin/python bench/uniform_order.py RUNS [--csv OUT.csv]
+prints the per-run table and the per-category summary (Markdown). Units: heights in D50, U and
+|ψ6| dimensionless. Needs numpy, pandas, scipy (the project's venv).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from scipy.spatial import Delaunay
+
+from interphase.analysis.ensemble import t_interval
+
+ORDERED = 0.7          # |ψ6| above which a grain counts as ordered (the tool's CRYSTALLINE_PSI6)
+BAND_LEVEL = 0.1       # U at the band's top (interphase.analysis.strength.BAND_LEVEL)
+EXCLUDE_LOW = 0.5      # grains closer than this [D50] above the boundary are left out of the zones
+TOP_CLEAR = 3.0        # and those within this [D50] of the highest grain top (the platen)
+BAND_HALF = 1.5        # the band: grains within this [D50] of the active slip plane
+OUTSIDE_GAP = 4.0      # outside the band: grains at least this [D50] from it
+
+
+# ---- order ---------------------------------------------------------------------------------------
+
+def psi6(x, z, r, length: float) -> np.ndarray:
+    """Complex ψ6 per grain (NaN for a grain with fewer than 2 neighbours): Delaunay of the centres
+    with their images at x ± length; each original grain's edges to any copy count."""
+    n = x.size
+    xs = np.concatenate([x, x - length, x + length])
+    zs = np.concatenate([z, z, z])
+    tri = Delaunay(np.column_stack([xs, zs]))
+    s = tri.simplices
+    e = np.concatenate([s[:, [0, 1]], s[:, [1, 2]], s[:, [2, 0]]])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    a, b = e[:, 0], e[:, 1]
+    # keep the edges that touch an original grain; the bond seen from each original end
+    dx, dz = xs[b] - xs[a], zs[b] - zs[a]
+    rr = np.concatenate([r, r, r])
+    ok = np.hypot(dx, dz) < 2.0 * 2 * rr.max()
+    a, b, dx, dz = a[ok], b[ok], dx[ok], dz[ok]
+    w = np.exp(6j * np.arctan2(dz, dx))          # a bond and its reverse give the same exp(6iθ)
+    total = np.zeros(n, complex)
+    count = np.zeros(n)
+    for ends in (a, b):
+        own = ends < n
+        np.add.at(total, ends[own], w[own])
+        np.add.at(count, ends[own], 1.0)
+    # an edge between two copies of grain pairs is counted once per original end it has: edges
+    # whose both ends are images are ignored, so each original grain sees each neighbour once
+    # (its bonds to the left and right images are distinct Delaunay edges, as they should be)
+    out = np.full(n, np.nan + 0j)
+    good = count >= 2
+    out[good] = total[good] / count[good]
+    return out
+
+
+# ---- geometry of a run ---------------------------------------------------------------------------
+
+def stl_top(path: Path) -> float:
+    z = [float(line.split()[3]) for line in path.read_text().splitlines() if line.strip().startswith("vertex")]
+    return max(z)
+
+
+def boundary(folder: Path, test: str, snap0: pd.DataFrame) -> tuple[float, np.ndarray]:
+    """(z of the boundary [m], bed mask over snap0's rows)."""
+    z, r = snap0["z"].to_numpy(), snap0["radius"].to_numpy()
+    if test == "box":
+        bed = np.isclose(z, z.min(), rtol=0, atol=1e-9)
+        return float(np.max(z[bed] + r[bed])), bed
+    return stl_top(folder / "surface.stl"), np.zeros(z.size, bool)
+
+
+def unwrap(dx: np.ndarray, length: float) -> np.ndarray:
+    return (dx + length / 2) % length - length / 2
+
+
+def profile_u(a: pd.DataFrame, b: pd.DataFrame, zb: float, d50: float, length: float, moving: np.ndarray):
+    """(layer lower edges h [D50], U per layer) between snapshots a and b (both sorted by id)."""
+    ds = float(b["shear_disp"].iloc[0] - a["shear_disp"].iloc[0])
+    u = unwrap(b["x"].to_numpy() - a["x"].to_numpy(), length)
+    z = a["z"].to_numpy()
+    h = (z - zb) / d50
+    soil = ~moving
+    far = soil & (z >= z[soil].max() - 2 * d50)
+    U = (u - u[far].mean()) / (-ds)
+    edges = np.arange(0.0, np.floor(h[soil].max()) + 1)
+    k = np.floor(h).astype(int)
+    sel = soil & (h >= 0)
+    cnt = np.bincount(k[sel], minlength=edges.size)[: edges.size]
+    tot = np.bincount(k[sel], weights=U[sel], minlength=edges.size)[: edges.size]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return edges, tot / cnt
+
+
+def band_top(edges, U) -> float:
+    """First height (layer centre, interpolated) at which U falls to BAND_LEVEL [D50]; 0 when the
+    first layer is already below it (slip on the boundary); NaN if it never does."""
+    c = edges + 0.5
+    ok = np.isfinite(U)
+    c, U = c[ok], U[ok]
+    if U.size == 0:
+        return math.nan
+    if U[0] <= BAND_LEVEL:
+        return 0.0
+    below = np.flatnonzero(U <= BAND_LEVEL)
+    if below.size == 0:
+        return math.nan
+    k = int(below[0])
+    return float(c[k - 1] + (U[k - 1] - BAND_LEVEL) * (c[k] - c[k - 1]) / (U[k - 1] - U[k]))
+
+
+def slip_planes(by, snaps, zb, d50, length, bed) -> dict:
+    """Where the shear goes, interval by interval (each 0.5 mm snapshot interval from 1 mm on): the
+    height [D50] of the largest drop of U between adjacent 1-D50 layers (the active slip plane), its
+    share of the whole drop U(first layer) − U(top layer) (1: one plane takes all the shear, a block
+    sliding on a lattice plane; ~1/n for a uniform shear over n layers), and its height as a fraction
+    of the soil's height. Means over the intervals."""
+    hs, shares, rel, below_top = [], [], [], []
+    for s0, s1 in zip(snaps[2:-1], snaps[3:]):
+        edges, U = profile_u(by[s0], by[s1], zb, d50, length, bed)
+        ok = np.isfinite(U)
+        if ok.sum() < 4:
+            continue
+        e, u = edges[ok], U[ok]
+        drop = u[:-1] - u[1:]
+        k = int(np.argmax(drop))
+        total = u[0] - u[-1]
+        top = e[-1] + 1.0
+        hs.append(e[k] + 1.0)                          # the plane between layer k and k + 1
+        shares.append(drop[k] / total if total > 0.2 else np.nan)
+        rel.append((e[k] + 1.0) / top)
+        below_top.append(top - (e[k] + 1.0))
+    if not hs:
+        return dict.fromkeys(("slip_plane_h_d50", "slip_plane_rel", "slip_plane_bottom3", "slip_plane_top3",
+                              "slip_share"), math.nan)
+    hs, rel, below_top = np.asarray(hs), np.asarray(rel), np.asarray(below_top)
+    return dict(slip_plane_h_d50=float(hs.mean()), slip_plane_rel=float(rel.mean()),
+                slip_plane_bottom3=float(np.mean(hs <= 3.0)), slip_plane_top3=float(np.mean(below_top <= 3.0)),
+                slip_share=float(np.nanmean(shares)))
+
+
+def zone_stats(p6: np.ndarray, mask: np.ndarray) -> tuple[float, float, float, int]:
+    """(mean |ψ6|, fraction > ORDERED, share of ordered grains with horizontal rows, count)."""
+    v = p6[mask & np.isfinite(p6)]
+    if v.size == 0:
+        return math.nan, math.nan, math.nan, 0
+    m = np.abs(v)
+    ang = np.degrees(np.angle(v[m > ORDERED])) / 6.0          # lattice orientation, (−30°, 30°]
+    horiz = float(np.mean(np.abs(ang) < 7.5)) if ang.size else math.nan
+    return float(m.mean()), float(np.mean(m > ORDERED)), horiz, int(v.size)
+
+
+def analyse_run(folder: Path) -> dict:
+    case = json.loads((folder / "case.json").read_text())
+    inp = case["inputs"]
+    summ = json.loads((folder / "summary.json").read_text())["row"]
+    d50, length = inp["d50"], inp["box_length_d50"] * inp["d50"]
+    p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "shear_disp", "id", "x", "z", "radius"])
+    snaps = np.sort(p["snapshot"].unique())
+    by = {s: g.sort_values("id").reset_index(drop=True) for s, g in p.groupby("snapshot")}
+    first, last = by[snaps[0]], by[snaps[-1]]
+    zb, bed = boundary(folder, inp["test"], first)
+    out = dict(case_id=case["case_id"], test=inp["test"], gradation=inp["gradation"], seed=inp["seed"],
+               n_grains=len(first), boundary_z_d50=zb / d50)
+    # displacement profiles: start (0 → 1 mm) and end (the last 1 mm); the active slip plane of each
+    # (the largest drop of U between adjacent 1-D50 layers)
+    plane = {}
+    for tag, (s0, s1) in (("start", (snaps[0], snaps[min(2, snaps.size - 1)])), ("end", (snaps[-3], snaps[-1]))):
+        edges, U = profile_u(by[s0], by[s1], zb, d50, length, bed)
+        out[f"band_top_{tag}_d50"] = band_top(edges, U)
+        out[f"slip_{tag}"] = float(1 - U[0]) if U.size and np.isfinite(U[0]) else math.nan
+        out[f"U_{tag}"] = ";".join(f"{v:.2f}" for v in U)
+        ok = np.isfinite(U)
+        drop = U[ok][:-1] - U[ok][1:]
+        plane[tag] = float(edges[ok][int(np.argmax(drop))] + 1.0) if drop.size else math.nan
+        out[f"plane_{tag}_d50"] = plane[tag]
+    out |= slip_planes(by, snaps, zb, d50, length, bed)
+    for tag, snap in (("start", first), ("end", last)):
+        x, z, r = (snap[c].to_numpy(float) for c in ("x", "z", "radius"))
+        x = x % length
+        p6 = psi6(x, z, r, length)
+        h = (z - zb) / d50
+        top = (np.max(z + r) - zb) / d50 - TOP_CLEAR
+        soil = ~bed & (h >= EXCLUDE_LOW) & (h <= top)
+        pe = plane["end"] if math.isfinite(plane["end"]) else 1.0
+        zones = {
+            # the band: within BAND_HALF of the slip plane of the last 1 mm (at the start: of the
+            # first 1 mm); outside: at least OUTSIDE_GAP from it
+            "band": soil & (np.abs(h - plane[tag]) <= BAND_HALF),
+            "outside": soil & (np.abs(h - plane[tag]) >= OUTSIDE_GAP),
+            "endband": soil & (np.abs(h - pe) <= BAND_HALF),
+            "L0.5-2": soil & (h < 2),
+            "L2-5": soil & (h >= 2) & (h < 5),
+            "L5-top": soil & (h >= 5),
+            "all": soil,
+        }
+        for name, mask in zones.items():
+            m, fr, hz, n = zone_stats(p6, mask)
+            out[f"psi6_{name}_{tag}"] = m
+            out[f"frac07_{name}_{tag}"] = fr
+            out[f"horiz_{name}_{tag}"] = hz
+            out[f"n_{name}_{tag}"] = n
+    for k in ("peak_stress_ratio", "residual_stress_ratio", "solid_fraction", "solid_fraction_end", "a_region",
+              "shear_band_d50"):
+        out[k] = summ.get(k, math.nan)
+    out["shear_band_reason"] = summ.get("reasons", {}).get("shear_band_d50", "")
+    return out
+
+
+# ---- summary -------------------------------------------------------------------------------------
+
+def welch(a, b) -> tuple[float, float, float]:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    if a.size < 2 or b.size < 2:
+        return math.nan, math.nan, math.nan
+    va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
+    d = a.mean() - b.mean()
+    se = math.sqrt(va + vb)
+    if se == 0:
+        return d, d, d
+    nu = (va + vb) ** 2 / (va ** 2 / (a.size - 1) + vb ** 2 / (b.size - 1))
+    half = stats.t.ppf(0.975, nu) * se
+    return d, d - half, d + half
+
+
+def fmt(v) -> str:
+    v = np.asarray(v, float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return "n/a"
+    if v.size < 2:
+        return f"{v.mean():.3f} (n=1)"
+    lo, hi = t_interval(v)
+    return f"{v.mean():.3f} ({lo:.3f}–{hi:.3f}) n={v.size}"
+
+
+METRICS = ["psi6_all_start", "frac07_all_start", "psi6_band_start", "psi6_outside_start", "psi6_endband_start",
+           "frac07_endband_start",
+           "psi6_L0.5-2_start", "psi6_L2-5_start", "psi6_L5-top_start",
+           "psi6_band_end", "frac07_band_end", "psi6_outside_end", "frac07_outside_end",
+           "psi6_L0.5-2_end", "frac07_L0.5-2_end", "psi6_L2-5_end", "psi6_L5-top_end",
+           "horiz_band_start", "horiz_band_end", "horiz_outside_end",
+           "horiz_all_start", "horiz_all_end",
+           "band_top_start_d50", "band_top_end_d50", "slip_start", "slip_end", "plane_start_d50", "plane_end_d50",
+           "slip_plane_h_d50", "slip_plane_rel", "slip_plane_bottom3", "slip_plane_top3", "slip_share",
+           "peak_stress_ratio", "residual_stress_ratio", "solid_fraction", "a_region"]
+
+
+def summary_markdown(df: pd.DataFrame) -> str:
+    lines = []
+    cats = [(g, t) for g in ("mono", "poly") for t in ("box", "interface") if ((df.gradation == g) & (df.test == t)).any()]
+    lines.append("| metric | " + " | ".join(f"{g} {t}" for g, t in cats) + " | mono box − teeth | poly box − teeth |")
+    lines.append("|---" * (len(cats) + 3) + "|")
+    for m in METRICS:
+        row = [fmt(df[(df.gradation == g) & (df.test == t)][m]) for g, t in cats]
+        for g in ("mono", "poly"):
+            d, lo, hi = welch(df[(df.gradation == g) & (df.test == "box")][m], df[(df.gradation == g) & (df.test == "interface")][m])
+            row.append("n/a" if not math.isfinite(d) else f"{d:+.3f} ({lo:+.3f}, {hi:+.3f})")
+        lines.append(f"| {m} | " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("runs", type=Path)
+    ap.add_argument("--csv", type=Path)
+    args = ap.parse_args(argv)
+    rows = [analyse_run(f) for f in sorted(args.runs.iterdir()) if (f / "DONE").exists() and (f / "particles.parquet").exists()]
+    df = pd.DataFrame(rows).sort_values(["gradation", "test", "seed"])
+    if args.csv:
+        df.to_csv(args.csv, index=False)
+    cols = ["gradation", "test", "seed", "psi6_all_start", "psi6_band_end", "psi6_outside_end", "band_top_end_d50",
+            "slip_end", "peak_stress_ratio", "residual_stress_ratio", "shear_band_reason"]
+    pd.set_option("display.width", 250)
+    print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    print()
+    print(summary_markdown(df))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
