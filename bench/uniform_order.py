@@ -179,6 +179,40 @@ def slip_planes(by, snaps, zb, d50, length, bed) -> dict:
                 slip_share=float(np.nanmean(shares)))
 
 
+def n_wrapped(p: pd.DataFrame, summ: dict, length: float) -> int:
+    """Grains whose x jumps by more than L/2 between the snapshots either side of the peak snapshot
+    (they crossed the periodic boundary)."""
+    key = summ.get("peak_snapshot")
+    if key is None or not isinstance(key, (int, float)) or not math.isfinite(key):
+        return -1
+    snaps = np.sort(p["snapshot"].unique())
+    i = int(np.searchsorted(snaps, key))
+    a = p[p["snapshot"] == snaps[max(i - 1, 0)]].set_index("id")["x"]
+    b = p[p["snapshot"] == snaps[min(i + 1, snaps.size - 1)]].set_index("id")["x"]
+    return int((np.abs(b - a.reindex(b.index)) > length / 2).sum())
+
+
+def tool_band(p: pd.DataFrame, summ: dict, d50: float, length: float, unwrap_x: bool) -> tuple[float, str]:
+    """The tool's shear_band_d50 (analysis.summary_stages.shear_band: snapshots either side of the
+    peak snapshot, z_ref = region_z0), recomputed as it is (unwrap_x False) and with the grains'
+    x-displacement unwrapped across the periodic boundary (unwrap_x True)."""
+    from interphase.analysis import strength as st
+    key = summ.get("peak_snapshot")
+    if key is None or not isinstance(key, (int, float)) or not math.isfinite(key):
+        return math.nan, "no peak snapshot"
+    snaps = np.sort(p["snapshot"].unique())
+    i = int(np.searchsorted(snaps, key))
+    s0, s1 = snaps[max(i - 1, 0)], snaps[min(i + 1, snaps.size - 1)]
+    q = p[p["snapshot"].isin([s0, s1])].copy()
+    if unwrap_x:
+        a = q[q["snapshot"] == s0].set_index("id")["x"]
+        b = q["snapshot"] == s1
+        x0 = q.loc[b, "id"].map(a).to_numpy()
+        q.loc[b, "x"] = x0 + unwrap(q.loc[b, "x"].to_numpy() - x0, length)
+    prof = st.displacement_profile(q, s0, s1, summ["region_z0"])
+    return st.shear_band(prof["z"], prof["U"], summ["region_z0"], d50)
+
+
 def zone_stats(p6: np.ndarray, mask: np.ndarray) -> tuple[float, float, float, int]:
     """(mean |ψ6|, fraction > ORDERED, share of ordered grains with horizontal rows, count)."""
     v = p6[mask & np.isfinite(p6)]
@@ -244,6 +278,10 @@ def analyse_run(folder: Path) -> dict:
               "shear_band_d50"):
         out[k] = summ.get(k, math.nan)
     out["shear_band_reason"] = summ.get("reasons", {}).get("shear_band_d50", "")
+    out["tool_band_asis_d50"], _ = tool_band(p, summ, d50, length, unwrap_x=False)
+    out["tool_band_unwrapped_d50"], why = tool_band(p, summ, d50, length, unwrap_x=True)
+    out["tool_band_unwrapped_reason"] = why
+    out["n_wrapped_peak_interval"] = n_wrapped(p, summ, length)
     return out
 
 
@@ -284,7 +322,8 @@ METRICS = ["psi6_all_start", "frac07_all_start", "psi6_band_start", "psi6_outsid
            "horiz_all_start", "horiz_all_end",
            "band_top_start_d50", "band_top_end_d50", "slip_start", "slip_end", "plane_start_d50", "plane_end_d50",
            "slip_plane_h_d50", "slip_plane_rel", "slip_plane_bottom3", "slip_plane_top3", "slip_share",
-           "peak_stress_ratio", "residual_stress_ratio", "solid_fraction", "a_region"]
+           "peak_stress_ratio", "residual_stress_ratio", "solid_fraction", "a_region",
+           "shear_band_d50", "tool_band_asis_d50", "tool_band_unwrapped_d50", "n_wrapped_peak_interval"]
 
 
 def summary_markdown(df: pd.DataFrame) -> str:
