@@ -9,6 +9,10 @@ its lowest row, is the study's), every other grain placed by random sequential a
 centres closer than 1.02·d_max, x periodic) in a taller region whose exclusion-disc fraction is 0.40
 (a random, loose start; the engine's consolidation then packs it under gravity and the servo platen).
 Grain diameters are the lattice's own draw (same seed, same sizes, same order).
+`--bed irregular` (box only) also replaces the soil test's frozen bed: BED_KEEP (70 %) of row 0's
+grains, at random x along the row (1D random sequential addition, no two centres closer than
+1.02·d_max, periodic), still at row 0's height (the device freezes every grain at the lowest
+height): a bed with gaps from 0 to more than a grain and no period for a crystal to copy.
 
 The run folders carry the case id of the unpatched case (the id hashes the inputs, not the
 packing): keep them OUT of any campaign's runs folder. Default: /tmp/uni_runs/disordered/<label>.
@@ -35,6 +39,22 @@ RSA_FRACTION = 0.40      # area fraction of the exclusion discs (diameter 1.02 d
 SEED_OFFSET = 7919       # the placement's random stream, apart from the lattice's
 
 
+BED_KEEP = 0.70          # --bed irregular: this share of row 0's grains, at random x (1D random addition; its jamming limit is 0.748)
+IRREGULAR_BED = False
+
+
+def irregular_row(rng, n_keep: int, x_min: float, L: float, pitch: float) -> np.ndarray:
+    """n_keep centres on [x_min, x_min + L), periodic, no two closer than pitch: random sequential
+    addition in 1D (gaps from 0 to a grain and more: no period for a crystal to copy)."""
+    xs = np.empty(0)
+    while xs.size < n_keep:
+        c = rng.uniform(x_min, x_min + L)
+        d = np.abs(xs - c)
+        if np.all(np.minimum(d, L - d) >= pitch):
+            xs = np.append(xs, c)
+    return xs
+
+
 def disordered_packing(case, x_min: float, x_max: float, z_floor: float) -> Packing:
     lat = lattice_packing(case, x_min, x_max, z_floor)
     pitch = 1.02 * case.gradation.d_max
@@ -42,6 +62,10 @@ def disordered_packing(case, x_min: float, x_max: float, z_floor: float) -> Pack
     n = lat.n
     L = x_max - x_min
     x, z = lat.x.copy(), lat.z.copy()
+    if IRREGULAR_BED:          # the bed (row 0, every grain at its height) made irregular: fewer, at random x
+        keep = int(round(BED_KEEP * per_row))
+        x[:keep] = irregular_row(np.random.default_rng(case.seed + 2 * SEED_OFFSET), keep, x_min, L, pitch)
+        per_row = keep
     rest = n - per_row
     z0 = z_floor + pitch * (0.5 + math.sqrt(3) / 2)        # row 1's height in the lattice
     height = rest * math.pi * pitch ** 2 / 4 / RSA_FRACTION / L
@@ -76,13 +100,17 @@ def main(argv=None) -> int:
     ap.add_argument("--test", default="box", choices=["box", "interface"])
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     ap.add_argument("--out", type=Path, default=Path("/tmp/uni_runs/disordered"))
+    ap.add_argument("--bed", choices=["lattice", "irregular"], default="lattice",
+                    help="irregular: the box's frozen bed (row 0) made of BED_KEEP of its grains at random x")
     args = ap.parse_args(argv)
+    global IRREGULAR_BED
+    IRREGULAR_BED = args.bed == "irregular"
     device_mod.lattice_packing = disordered_packing           # this process only
     planned = [p for p in ip.plan(ip.load_campaign(args.campaign))
                if p.role == args.test and p.case.gradation.name == args.gradation and p.case.seed in args.seeds]
     from interphase.campaign.runner import run_single
     for p in sorted(planned, key=lambda p: p.case.seed):
-        folder = args.out / f"disordered-{p.label}"
+        folder = args.out / f"disordered{'-irregular-bed' if IRREGULAR_BED else ''}-{p.label}"
         res = run_single(p.case, "liggghts", folder)
         s = res.get("summary", {})
         print(p.label, res["status"], f"peak {s.get('peak_stress_ratio', float('nan')):.4f}",
