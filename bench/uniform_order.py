@@ -179,6 +179,22 @@ def slip_planes(by, snaps, zb, d50, length, bed) -> dict:
                 slip_share=float(np.nanmean(shares)))
 
 
+def fluctuation(folder: Path, d50: float) -> dict:
+    """Stick–slip of the run's stress-ratio curve (series.parquet), smoothed over the tool's peak
+    window (0.5 D50, analysis.strength.moving_average) and read from 1 mm of shear on: its mean
+    (ratio_mean_1mm), standard deviation (ratio_sd_1mm) and its maximum over the whole shear less
+    that mean (peak_over_mean) [-]."""
+    from interphase.analysis.strength import PEAK_WINDOW_D50, moving_average
+    s = pd.read_parquet(folder / "series.parquet", columns=["shear_disp", "stress_ratio"])
+    x, r = s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)
+    ok = np.isfinite(x) & np.isfinite(r)
+    x, r = x[ok], r[ok]
+    sm = moving_average(x, r, PEAK_WINDOW_D50 * d50)
+    m = x > 0.001
+    mean = float(np.nanmean(sm[m]))
+    return dict(ratio_mean_1mm=mean, ratio_sd_1mm=float(np.nanstd(sm[m])), peak_over_mean=float(np.nanmax(sm)) - mean)
+
+
 def n_wrapped(p: pd.DataFrame, summ: dict, length: float) -> int:
     """Grains whose x jumps by more than L/2 between the snapshots either side of the peak snapshot
     (they crossed the periodic boundary)."""
@@ -278,6 +294,7 @@ def analyse_run(folder: Path) -> dict:
               "shear_band_d50"):
         out[k] = summ.get(k, math.nan)
     out["shear_band_reason"] = summ.get("reasons", {}).get("shear_band_d50", "")
+    out |= fluctuation(folder, d50)
     out["tool_band_asis_d50"], _ = tool_band(p, summ, d50, length, unwrap_x=False)
     out["tool_band_unwrapped_d50"], why = tool_band(p, summ, d50, length, unwrap_x=True)
     out["tool_band_unwrapped_reason"] = why
@@ -322,7 +339,8 @@ METRICS = ["psi6_all_start", "frac07_all_start", "psi6_band_start", "psi6_outsid
            "horiz_all_start", "horiz_all_end",
            "band_top_start_d50", "band_top_end_d50", "slip_start", "slip_end", "plane_start_d50", "plane_end_d50",
            "slip_plane_h_d50", "slip_plane_rel", "slip_plane_bottom3", "slip_plane_top3", "slip_share",
-           "peak_stress_ratio", "residual_stress_ratio", "solid_fraction", "a_region",
+           "peak_stress_ratio", "residual_stress_ratio", "ratio_mean_1mm", "ratio_sd_1mm", "peak_over_mean",
+           "solid_fraction", "a_region",
            "shear_band_d50", "tool_band_asis_d50", "tool_band_unwrapped_d50", "n_wrapped_peak_interval"]
 
 
@@ -340,11 +358,84 @@ def summary_markdown(df: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
+def curves(runs: Path, test: str, gradation: str) -> list:
+    """(shear_disp [m], stress_ratio [-]) of every finished run of `test` and `gradation` in `runs`."""
+    out = []
+    for f in sorted(runs.iterdir()):
+        if not (f / "DONE").exists() or not (f / "series.parquet").exists():
+            continue
+        inp = json.loads((f / "case.json").read_text())["inputs"]
+        if inp["test"] == test and inp["gradation"] == gradation:
+            s = pd.read_parquet(f / "series.parquet", columns=["shear_disp", "stress_ratio"])
+            out.append((s["shear_disp"].to_numpy(float), s["stress_ratio"].to_numpy(float)))
+    return out
+
+
+def efficiency_lines(teeth_runs: Path, box_runs: Path, d50: float = 0.0007) -> list[str]:
+    """E = tan δ / tan φ at the peak and at the critical state from the seed ensembles, as the
+    tool's ensembles table reads them (analysis.ensemble.ensemble_efficiency, peak window 0.5 D50)."""
+    from interphase.analysis.ensemble import ensemble_efficiency, ensemble_strength
+    from interphase.analysis.strength import PEAK_WINDOW_D50
+    lines = []
+    for g in ("mono", "poly"):
+        a, b = curves(teeth_runs, "interface", g), curves(box_runs, "box", g)
+        if not a or not b:
+            continue
+        w = PEAK_WINDOW_D50 * d50
+        e = ensemble_efficiency(a, b, w)
+        sa, sb = ensemble_strength(a, w), ensemble_strength(b, w)
+        lines.append(f"| {g} | {teeth_runs.name} ({len(a)}) | {box_runs.name} ({len(b)}) | "
+                     f"{sa.peak:.3f} ({sa.peak_lo:.3f}–{sa.peak_hi:.3f}) | {sb.peak:.3f} ({sb.peak_lo:.3f}–{sb.peak_hi:.3f}) | "
+                     f"{e.peak:.3f} ({e.peak_lo:.3f}–{e.peak_hi:.3f}) | "
+                     f"{sa.critical:.3f} ({sa.critical_lo:.3f}–{sa.critical_hi:.3f}) | "
+                     f"{sb.critical:.3f} ({sb.critical_lo:.3f}–{sb.critical_hi:.3f}) | "
+                     f"{e.critical:.3f} ({e.critical_lo:.3f}–{e.critical_hi:.3f}) |")
+    return lines
+
+
+def figure(folders: list[Path], path: Path) -> None:
+    """The grains of each run at the start and at the end of the shear, coloured by |ψ6|."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Circle
+    fig, axes = plt.subplots(len(folders), 2, figsize=(12, 3.6 * len(folders)), squeeze=False)
+    for row, folder in zip(axes, folders):
+        inp = json.loads((folder / "case.json").read_text())["inputs"]
+        d50, length = inp["d50"], inp["box_length_d50"] * inp["d50"]
+        p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "id", "x", "z", "radius"])
+        snaps = np.sort(p["snapshot"].unique())
+        for ax, snap, tag in zip(row, (snaps[0], snaps[-1]), ("start of shear", "end of shear (6 mm)")):
+            g = p[p["snapshot"] == snap]
+            x, z, r = (g[c].to_numpy(float) for c in ("x", "z", "radius"))
+            x = x % length
+            m = np.abs(psi6(x, z, r, length))
+            pc = PatchCollection([Circle((a / d50, b / d50), c / d50) for a, b, c in zip(x, z, r)], cmap="viridis")
+            pc.set_array(np.nan_to_num(m))
+            pc.set_clim(0, 1)
+            ax.add_collection(pc)
+            ax.set_xlim(0, length / d50)
+            ax.set_ylim(min(0, (z - r).min() / d50), (z + r).max() / d50)
+            ax.set_aspect("equal")
+            ax.set_title(f"{inp['test']} {inp['gradation']} seed {inp['seed']}: {tag}", fontsize=9)
+            ax.set_xlabel("x [D50]")
+            ax.set_ylabel("z [D50]")
+    fig.colorbar(pc, ax=axes, shrink=0.6, label="|ψ6|")
+    fig.savefig(path, dpi=110)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs", type=Path)
     ap.add_argument("--csv", type=Path)
+    ap.add_argument("--box-runs", type=Path, help="take the soil tests for E from this runs folder instead")
+    ap.add_argument("--figure", type=Path, nargs="+", metavar="PNG CASE_FOLDER",
+                    help="only draw: PNG then the case folders (start and end of shear, grains coloured by |ψ6|)")
     args = ap.parse_args(argv)
+    if args.figure:
+        figure([Path(f) for f in args.figure[1:]], Path(args.figure[0]))
+        return 0
     rows = [analyse_run(f) for f in sorted(args.runs.iterdir()) if (f / "DONE").exists() and (f / "particles.parquet").exists()]
     df = pd.DataFrame(rows).sort_values(["gradation", "test", "seed"])
     if args.csv:
@@ -355,6 +446,12 @@ def main(argv=None) -> int:
     print(df[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     print()
     print(summary_markdown(df))
+    lines = efficiency_lines(args.runs, args.box_runs or args.runs)
+    if lines:
+        print()
+        print("| gradation | teeth runs (n) | box runs (n) | tan δ peak | tan φ peak | E peak | tan δ cs | tan φ cs | E cs |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        print("\n".join(lines))
     return 0
 
 

@@ -12,7 +12,9 @@ Grain diameters are the lattice's own draw (same seed, same sizes, same order).
 `--bed irregular` (box only) also replaces the soil test's frozen bed: BED_KEEP (70 %) of row 0's
 grains, at random x along the row (1D random sequential addition, no two centres closer than
 1.02·d_max, periodic), still at row 0's height (the device freezes every grain at the lowest
-height): a bed with gaps from 0 to more than a grain and no period for a crystal to copy.
+height): a bed with gaps from 0 to more than a grain and no period for a crystal to copy; with
+`--start lattice` the soil above it stays the tool's lattice (row 0's other grains moved to the
+lattice's next free slots at its top), so the bed alone changes.
 
 The run folders carry the case id of the unpatched case (the id hashes the inputs, not the
 packing): keep them OUT of any campaign's runs folder. Default: /tmp/uni_runs/disordered/<label>.
@@ -41,6 +43,7 @@ SEED_OFFSET = 7919       # the placement's random stream, apart from the lattice
 
 BED_KEEP = 0.70          # --bed irregular: this share of row 0's grains, at random x (1D random addition; its jamming limit is 0.748)
 IRREGULAR_BED = False
+LATTICE_START = False     # --start lattice: keep the lattice above the bed (only the bed changes)
 
 
 def irregular_row(rng, n_keep: int, x_min: float, L: float, pitch: float) -> np.ndarray:
@@ -65,6 +68,13 @@ def disordered_packing(case, x_min: float, x_max: float, z_floor: float) -> Pack
     if IRREGULAR_BED:          # the bed (row 0, every grain at its height) made irregular: fewer, at random x
         keep = int(round(BED_KEEP * per_row))
         x[:keep] = irregular_row(np.random.default_rng(case.seed + 2 * SEED_OFFSET), keep, x_min, L, pitch)
+        if LATTICE_START:      # row 0's other grains go to the next free slots of the lattice, at its top
+            slots = np.arange(n, n + per_row - keep)
+            row, col = slots // per_row, slots % per_row
+            x[keep:per_row] = x_min + pitch * (col + 0.5 + 0.5 * (row % 2))
+            z[keep:per_row] = z_floor + pitch * (0.5 + row * math.sqrt(3) / 2)
+            z[keep:] += 0.15 * pitch   # a bed grain may now sit under a row-1 grain: lift the lattice clear
+            return Packing(x, z, lat.diameter, float(np.max(z + lat.diameter / 2)))
         per_row = keep
     rest = n - per_row
     z0 = z_floor + pitch * (0.5 + math.sqrt(3) / 2)        # row 1's height in the lattice
@@ -102,15 +112,21 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=Path("/tmp/uni_runs/disordered"))
     ap.add_argument("--bed", choices=["lattice", "irregular"], default="lattice",
                     help="irregular: the box's frozen bed (row 0) made of BED_KEEP of its grains at random x")
+    ap.add_argument("--start", choices=["random", "lattice"], default="random",
+                    help="lattice (with --bed irregular only): keep the tool's lattice above the bed")
     args = ap.parse_args(argv)
-    global IRREGULAR_BED
+    global IRREGULAR_BED, LATTICE_START
     IRREGULAR_BED = args.bed == "irregular"
+    LATTICE_START = args.start == "lattice"
+    if LATTICE_START and not IRREGULAR_BED:
+        ap.error("--start lattice is the tool's own start: use `campaign run` (only --bed irregular changes it here)")
     device_mod.lattice_packing = disordered_packing           # this process only
     planned = [p for p in ip.plan(ip.load_campaign(args.campaign))
                if p.role == args.test and p.case.gradation.name == args.gradation and p.case.seed in args.seeds]
     from interphase.campaign.runner import run_single
     for p in sorted(planned, key=lambda p: p.case.seed):
-        folder = args.out / f"disordered{'-irregular-bed' if IRREGULAR_BED else ''}-{p.label}"
+        tag = ("lattice" if LATTICE_START else "disordered") + ("-irregular-bed" if IRREGULAR_BED else "")
+        folder = args.out / f"{tag}-{p.label}"
         res = run_single(p.case, "liggghts", folder)
         s = res.get("summary", {})
         print(p.label, res["status"], f"peak {s.get('peak_stress_ratio', float('nan')):.4f}",
