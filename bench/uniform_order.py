@@ -355,7 +355,7 @@ def summary_markdown(df: pd.DataFrame) -> str:
             d, lo, hi = welch(df[(df.gradation == g) & (df.test == "box")][m], df[(df.gradation == g) & (df.test == "interface")][m])
             row.append("n/a" if not math.isfinite(d) else f"{d:+.3f} ({lo:+.3f}, {hi:+.3f})")
         lines.append(f"| {m} | " + " | ".join(row) + " |")
-    return "\n".join(lines)
+    return "\n".join(lines + [""] + peaks)
 
 
 def curves(runs: Path, test: str, gradation: str) -> list:
@@ -425,14 +425,66 @@ def figure(folders: list[Path], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
+COMPARE_METRICS = ["psi6_all_start", "frac07_all_start", "psi6_L0.5-2_start", "psi6_L0.5-2_end", "psi6_band_end",
+                   "frac07_band_end", "psi6_outside_end", "horiz_all_start", "horiz_all_end", "horiz_band_end",
+                   "slip_share", "slip_plane_bottom3", "peak_stress_ratio", "residual_stress_ratio", "ratio_mean_1mm",
+                   "ratio_sd_1mm", "peak_over_mean", "solid_fraction", "a_region"]
+
+
+def seed_mean_peak(runs: Path, test: str, gradation: str, d50: float = 0.0007) -> str:
+    """The seeds' curves smoothed (0.5 D50 window) on a common grid: the mean of the per-run maxima,
+    the maximum of the seed-mean curve and where it sits [mm], the per-run peak positions (mean ± sd
+    [mm]). A coherent peak (every seed peaking together) keeps the seed-mean maximum near the per-run
+    one; stick–slip spikes at random displacements do not (what the ensembles' peak reads)."""
+    from interphase.analysis.strength import PEAK_WINDOW_D50, moving_average
+    cs = curves(runs, test, gradation)
+    if not cs:
+        return "n/a"
+    end = min(float(np.nanmax(x)) for x, _ in cs)
+    grid = np.linspace(0.0, end, 400)
+    m = np.array([np.interp(grid, x, moving_average(x, r, PEAK_WINDOW_D50 * d50)) for x, r in cs])
+    at = grid[m.argmax(1)] * 1e3
+    mean = m.mean(0)
+    return (f"per-run max {m.max(1).mean():.3f}, seed-mean curve max {mean.max():.3f} at {grid[mean.argmax()] * 1e3:.2f} mm, "
+            f"per-run peaks at {at.mean():.2f} ± {at.std(ddof=1):.2f} mm")
+
+
+def compare(specs: list[str]) -> str:
+    """Markdown: each set (LABEL=RUNS_DIR:TEST:GRADATION) with its seed mean and interval, and its
+    Welch difference from the first set."""
+    sets, peaks = [], []
+    for spec in specs:
+        label, rest = spec.split("=", 1)
+        runs, test, grad = rest.rsplit(":", 2)
+        peaks.append(f"- {label}: {seed_mean_peak(Path(runs), test, grad)}")
+        rows = [analyse_run(f) for f in sorted(Path(runs).iterdir()) if (f / "DONE").exists()]
+        df = pd.DataFrame(rows)
+        sets.append((label, df[(df.test == test) & (df.gradation == grad)]))
+    head = "| metric | " + " | ".join(f"{lab} (n={len(d)})" for lab, d in sets) + " | " + \
+        " | ".join(f"{lab} − {sets[0][0]}" for lab, _ in sets[1:]) + " |"
+    lines = [head, "|---" * (2 * len(sets)) + "|"]
+    for m in COMPARE_METRICS:
+        row = [fmt(d[m]) for _, d in sets]
+        for _, d in sets[1:]:
+            dd, lo, hi = welch(d[m], sets[0][1][m])
+            row.append("n/a" if not math.isfinite(dd) else f"{dd:+.3f} ({lo:+.3f}, {hi:+.3f})")
+        lines.append(f"| {m} | " + " | ".join(row) + " |")
+    return "\n".join(lines + [""] + peaks)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("runs", type=Path)
     ap.add_argument("--csv", type=Path)
     ap.add_argument("--box-runs", type=Path, help="take the soil tests for E from this runs folder instead")
+    ap.add_argument("--compare", nargs="+", metavar="LABEL=RUNS_DIR:TEST:GRADATION",
+                    help="only compare these sets (RUNS is then ignored): means, intervals, Welch differences from the first")
     ap.add_argument("--figure", type=Path, nargs="+", metavar="PNG CASE_FOLDER",
                     help="only draw: PNG then the case folders (start and end of shear, grains coloured by |ψ6|)")
     args = ap.parse_args(argv)
+    if args.compare:
+        print(compare(args.compare))
+        return 0
     if args.figure:
         figure([Path(f) for f in args.figure[1:]], Path(args.figure[0]))
         return 0
