@@ -1,40 +1,56 @@
 """Order of the grains in the soil test ("box") and on rough teeth: does crystallisation of the
 uniform discs explain why their soil test reads weaker than the same grains on teeth?
+(Results: bench/results/uniform_order_2026-12-05.md.)
 
-What it measures, per finished run folder (particles.parquet, case.json, summary.json of a
-`campaign run` of campaigns/checks/uniform_order.toml), at the start of the shear (snapshot 0) and at
-its end (the last snapshot, the critical state):
-  - |ψ6| per grain [-], the 2D bond-orientational (hexatic) order: |mean over neighbours of
-    exp(6iθ)|, θ the bond's angle in the x–z plane, neighbours the edges of a Delaunay triangulation
-    (scipy.spatial) of the grain centres with their periodic images at x ± L (L the cell length), so
-    no grain loses a neighbour at the periodic boundary. Edges longer than 2 d_max (the hull's
-    spurious edges at the free top) are dropped. 1 = a triangular lattice, ~0.3–0.5 a disordered
-    packing. Reported per zone: the mean |ψ6| and the fraction of grains with |ψ6| > 0.7.
-    Also the lattice's orientation arg(ψ6)/6 [°]: the share of ordered grains whose rows lie within
-    ±7.5° of the shear direction (horizontal rows, the planes a crystal slips on in this shear).
-  - the normalised x-displacement profile U(h) [-] between two snapshots (x unwrapped across the
-    periodic boundary), by layers 1 D50 thick of the height h above the boundary [D50]; U = 1 moves
-    with the boundary (surface or frozen bed, which travel −x), U = 0 with the top (the mean of the
-    grains within 2 D50 of the highest centre). The boundary is the teeth's tips (max z of
-    surface.stl) on the interface, the top of the frozen bed (max z + r of its grains, the lowest
-    lattice row, which never moves in z) in the box. From U: the band top h_band [D50] = the first
-    height at which U falls to 0.1 (the tool's BAND_LEVEL), and the slip at the boundary
-    1 − U(first layer h ∈ [0, 1)) [-] (1: the soil slides on the boundary, 0: the first layer moves
-    with it). Start: snapshots 0 → 2 (0–1 mm); end: the last two intervals (5–6 mm).
-  - zones for |ψ6|: "band" = grains with h ∈ [0.5, max(h_band, 2)] at the end-of-shear interval (the
-    first half layer is left out: on teeth those grains touch the surface and lose a neighbour to it);
-    "outside" = h from that top + 1 D50 up to 3 D50 below the highest grain top (clear of the platen);
-    also the fixed layers h ∈ [0.5, 2), [2, 5), [5, top − 3 D50) so start and end compare like with like.
-  - the strength values of the run as the tool summarised them (peak_stress_ratio,
-    residual_stress_ratio, solid_fraction, a_region = contact-normal/force fabric anisotropy in the
-    region at the peak snapshot, shear_band_d50 and its reason).
-Means over seeds are reported with their 95 % Student-t interval (interphase.analysis.ensemble
-.t_interval); differences box − teeth with a Welch 95 % interval.
+What it measures, per finished run folder (particles.parquet, series.parquet, case.json,
+summary.json; from `campaign run campaigns/checks/uniform_order.toml` or
+bench/uniform_order_disordered.py), at the start of the shear (snapshot 0) and at its end (the last
+snapshot, 6 mm):
+  - |ψ6| per grain [-]: the 2D bond-orientational (hexatic) order, |mean over neighbours of
+    exp(6iθ)|, where θ is the bond's angle in the x–z plane. Neighbours are the edges of a Delaunay
+    triangulation (scipy.spatial) of the grain centres with their periodic images at x ± L (L the
+    cell length), so no grain loses a neighbour at the periodic boundary. Edges longer than 2 d_max
+    (the hull's spurious edges at the free top) are dropped. A triangular lattice gives 1; a
+    disordered packing gives ~0.45 here. Reported per zone: the mean |ψ6|, the share of grains with
+    |ψ6| > 0.7, and the lattice orientation arg(ψ6)/6 [°] as the share of ordered grains whose rows
+    lie within ±7.5° of the shear direction ("horiz": rows parallel to the shear, the planes a
+    crystal slips on in this test).
+  - heights h [D50] above the boundary: the teeth's tips (max z of surface.stl) on the interface,
+    the top of the frozen bed in the box (max z + r of its grains, the grains at the lowest height,
+    which never move in z). Grains with h < 0.5 D50 (on teeth, those touching the surface) and those
+    within 3 D50 of the highest grain top (the platen) are left out of every zone.
+  - the normalised x-displacement profile U(h) [-] between two snapshots, by layers 1 D50 thick,
+    with x unwrapped across the periodic boundary. U = 1 moves with the boundary (surface or bed,
+    which travel −x); U = 0 moves with the top (the mean of the grains within 2 D50 of the highest
+    centre). The active slip plane of an interval is the height of the largest drop of U between
+    adjacent layers. Zones: "band" = within 1.5 D50 of the slip plane of the last 1 mm (at the
+    start: of the first 1 mm); "outside" = at least 4 D50 from it; "endband" = the end band's
+    grains at either time; fixed layers h 0.5–2, 2–5, 5–top. Over every 0.5-mm interval from 1 mm:
+    slip_share = the largest jump's share of the whole drop (1 = one plane takes all the shear;
+    ~1/n for a uniform shear over n layers); slip_plane_bottom3 / top3 = the share of intervals
+    whose plane lies within 3 D50 of the boundary / of the top; slip_plane_h_d50 = its mean height.
+  - the stress-ratio curve (series.parquet) smoothed over the tool's 0.5-D50 peak window:
+    ratio_mean_1mm and ratio_sd_1mm (mean and sd from 1 mm of shear on; the sd measures stick–slip)
+    and peak_over_mean [-].
+  - the tool's shear_band_d50 recomputed as the tool does it (tool_band_asis_d50) and with x
+    unwrapped (tool_band_unwrapped_d50), plus the number of grains crossing the periodic boundary
+    between the snapshots it uses (n_wrapped_peak_interval): the committed value is a wrap artefact.
+  - the run's own summary values (peak_stress_ratio, residual_stress_ratio, solid_fraction,
+    a_region = the fabric anisotropy in the region at the peak snapshot).
+  - E = tan δ / tan φ at the peak and at the critical state from the seed ensembles, as the tool's
+    ensembles table reads them (analysis.ensemble.ensemble_efficiency).
+Means over seeds come with their 95 % Student-t interval (interphase.analysis.ensemble.t_interval),
+differences with a Welch 95 % interval.
 
-Run (after `campaign run campaigns/checks/uniform_order.toml --runs RUNS`):
-    PYTHONPATH=src .venv/bin/python bench/uniform_order.py RUNS [--csv OUT.csv]
-prints the per-run table and the per-category summary (Markdown). Units: heights in D50, U and
-|ψ6| dimensionless. Needs numpy, pandas, scipy (the project's venv).
+Run, from the repository root:
+    PYTHONPATH=src .venv/bin/python bench/uniform_order.py RUNS [--csv OUT.csv] [--box-runs RUNS2]
+        per-run table, per-category summary (mono/poly × box/teeth) and E (Markdown)
+    PYTHONPATH=src .venv/bin/python bench/uniform_order.py X --compare "LABEL=RUNS:TEST:GRADATION" ...
+        sets side by side, Welch differences from the first, and each set's seed-mean peak
+    PYTHONPATH=src .venv/bin/python bench/uniform_order.py X --figure OUT.png CASE_FOLDER ...
+        the grains coloured by |ψ6| at the start and the end of the shear
+Units: heights in D50, ratios, U and |ψ6| dimensionless, displacements in mm where printed. Needs
+numpy, pandas, scipy and matplotlib (the project's venv); ~0.1 s per run.
 """
 
 from __future__ import annotations
@@ -355,7 +371,7 @@ def summary_markdown(df: pd.DataFrame) -> str:
             d, lo, hi = welch(df[(df.gradation == g) & (df.test == "box")][m], df[(df.gradation == g) & (df.test == "interface")][m])
             row.append("n/a" if not math.isfinite(d) else f"{d:+.3f} ({lo:+.3f}, {hi:+.3f})")
         lines.append(f"| {m} | " + " | ".join(row) + " |")
-    return "\n".join(lines + [""] + peaks)
+    return "\n".join(lines)
 
 
 def curves(runs: Path, test: str, gradation: str) -> list:
