@@ -63,9 +63,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import stats
+
 from scipy.spatial import Delaunay
 
+from interphase.analysis.difference import difference
 from interphase.analysis.ensemble import t_interval
 
 ORDERED = 0.7          # |ψ6| above which a grain counts as ordered (the tool's CRYSTALLINE_PSI6)
@@ -226,8 +227,8 @@ def n_wrapped(p: pd.DataFrame, summ: dict, length: float) -> int:
 
 def tool_band(p: pd.DataFrame, summ: dict, d50: float, length: float, unwrap_x: bool) -> tuple[float, str]:
     """The tool's shear_band_d50 (analysis.summary_stages.shear_band: snapshots either side of the
-    peak snapshot, z_ref = region_z0), recomputed as it is (unwrap_x False) and with the grains'
-    x-displacement unwrapped across the periodic boundary (unwrap_x True)."""
+    peak snapshot, z_ref = region_z0), recomputed without the periodic cell's length (unwrap_x False:
+    what the committed summaries hold) and with it (unwrap_x True: what the tool now reads)."""
     from interphase.analysis import strength as st
     key = summ.get("peak_snapshot")
     if key is None or not isinstance(key, (int, float)) or not math.isfinite(key):
@@ -235,13 +236,7 @@ def tool_band(p: pd.DataFrame, summ: dict, d50: float, length: float, unwrap_x: 
     snaps = np.sort(p["snapshot"].unique())
     i = int(np.searchsorted(snaps, key))
     s0, s1 = snaps[max(i - 1, 0)], snaps[min(i + 1, snaps.size - 1)]
-    q = p[p["snapshot"].isin([s0, s1])].copy()
-    if unwrap_x:
-        a = q[q["snapshot"] == s0].set_index("id")["x"]
-        b = q["snapshot"] == s1
-        x0 = q.loc[b, "id"].map(a).to_numpy()
-        q.loc[b, "x"] = x0 + unwrap(q.loc[b, "x"].to_numpy() - x0, length)
-    prof = st.displacement_profile(q, s0, s1, summ["region_z0"])
+    prof = st.displacement_profile(p, s0, s1, summ["region_z0"], period=length if unwrap_x else None)
     return st.shear_band(prof["z"], prof["U"], summ["region_z0"], d50)
 
 
@@ -321,18 +316,9 @@ def analyse_run(folder: Path) -> dict:
 # ---- summary -------------------------------------------------------------------------------------
 
 def welch(a, b) -> tuple[float, float, float]:
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
-    if a.size < 2 or b.size < 2:
-        return math.nan, math.nan, math.nan
-    va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
-    d = a.mean() - b.mean()
-    se = math.sqrt(va + vb)
-    if se == 0:
-        return d, d, d
-    nu = (va + vb) ** 2 / (va ** 2 / (a.size - 1) + vb ** 2 / (b.size - 1))
-    half = stats.t.ppf(0.975, nu) * se
-    return d, d - half, d + half
+    """mean(a) − mean(b) with its Welch 95 % interval (analysis.difference, whose sign is value − ref)."""
+    d = difference(b, a, tol=1.0)
+    return d.change, d.change_lo, d.change_hi
 
 
 def fmt(v) -> str:
