@@ -81,7 +81,10 @@ OUTSIDE_GAP = 4.0      # outside the band: grains at least this [D50] from it
 
 def psi6(x, z, r, length: float) -> np.ndarray:
     """Complex ψ6 per grain (NaN for a grain with fewer than 2 neighbours): Delaunay of the centres
-    with their images at x ± length; each original grain's edges to any copy count."""
+    with their images at x ± length; each original grain's edges to any copy count. Not the element
+    test's analysis.element.hexatic_order, which returns the mean |ψ6| only, over contact-distance
+    neighbours without periodic images: the zones here need each grain's value and orientation, and
+    the cell's ends are where the grains cross."""
     n = x.size
     xs = np.concatenate([x, x - length, x + length])
     zs = np.concatenate([z, z, z])
@@ -113,9 +116,19 @@ def psi6(x, z, r, length: float) -> np.ndarray:
 
 # ---- geometry of a run ---------------------------------------------------------------------------
 
-def stl_top(path: Path) -> float:
-    z = [float(line.split()[3]) for line in path.read_text().splitlines() if line.strip().startswith("vertex")]
-    return max(z)
+def stl_vertices(path: Path) -> np.ndarray:
+    """(n, 3) vertices of an ASCII STL [m] (the run's surface.stl: a few hundred facets)."""
+    rows = [line.split()[1:4] for line in path.read_text().splitlines() if line.lstrip().startswith("vertex")]
+    return np.asarray(rows, float)
+
+
+def cell_length(folder: Path, inp: dict) -> float:
+    """The periodic cell's length [m]: the sheared surface's x extent on an interface (the cell
+    closes on whole periods of the profile, Case.box_length), box_length_d50·D50 in the soil test."""
+    stl = folder / "surface.stl"
+    if inp["test"] == "interface" and stl.exists():
+        return float(np.ptp(stl_vertices(stl)[:, 0]))
+    return inp["box_length_d50"] * inp["d50"]
 
 
 def boundary(folder: Path, test: str, snap0: pd.DataFrame) -> tuple[float, np.ndarray]:
@@ -124,11 +137,12 @@ def boundary(folder: Path, test: str, snap0: pd.DataFrame) -> tuple[float, np.nd
     if test == "box":
         bed = np.isclose(z, z.min(), rtol=0, atol=1e-9)
         return float(np.max(z[bed] + r[bed])), bed
-    return stl_top(folder / "surface.stl"), np.zeros(z.size, bool)
+    return float(stl_vertices(folder / "surface.stl")[:, 2].max()), np.zeros(z.size, bool)
 
 
 def unwrap(dx: np.ndarray, length: float) -> np.ndarray:
-    return (dx + length / 2) % length - length / 2
+    """Nearest-image x displacement [m] (as analysis.strength.displacement_profile with its period)."""
+    return dx - length * np.round(dx / length)
 
 
 def profile_u(a: pd.DataFrame, b: pd.DataFrame, zb: float, d50: float, length: float, moving: np.ndarray):
@@ -255,7 +269,7 @@ def analyse_run(folder: Path) -> dict:
     case = json.loads((folder / "case.json").read_text())
     inp = case["inputs"]
     summ = json.loads((folder / "summary.json").read_text())["row"]
-    d50, length = inp["d50"], inp["box_length_d50"] * inp["d50"]
+    d50, length = inp["d50"], cell_length(folder, inp)
     p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "shear_disp", "id", "x", "z", "radius"])
     snaps = np.sort(p["snapshot"].unique())
     by = {s: g.sort_values("id").reset_index(drop=True) for s, g in p.groupby("snapshot")}
@@ -405,7 +419,7 @@ def figure(folders: list[Path], path: Path) -> None:
     fig, axes = plt.subplots(len(folders), 2, figsize=(12, 3.6 * len(folders)), squeeze=False)
     for row, folder in zip(axes, folders):
         inp = json.loads((folder / "case.json").read_text())["inputs"]
-        d50, length = inp["d50"], inp["box_length_d50"] * inp["d50"]
+        d50, length = inp["d50"], cell_length(folder, inp)
         p = pd.read_parquet(folder / "particles.parquet", columns=["snapshot", "id", "x", "z", "radius"])
         snaps = np.sort(p["snapshot"].unique())
         for ax, snap, tag in zip(row, (snaps[0], snaps[-1]), ("start of shear", "end of shear (6 mm)")):

@@ -27,6 +27,7 @@ then  PYTHONPATH=src .venv/bin/python bench/uniform_order.py /tmp/uni_runs/disor
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import sys
 from pathlib import Path
@@ -42,8 +43,6 @@ SEED_OFFSET = 7919       # the placement's random stream, apart from the lattice
 
 
 BED_KEEP = 0.70          # --bed irregular: this share of row 0's grains, at random x (1D random addition; its jamming limit is 0.748)
-IRREGULAR_BED = False
-LATTICE_START = False     # --start lattice: keep the lattice above the bed (only the bed changes)
 
 
 def irregular_row(rng, n_keep: int, x_min: float, L: float, pitch: float) -> np.ndarray:
@@ -58,17 +57,20 @@ def irregular_row(rng, n_keep: int, x_min: float, L: float, pitch: float) -> np.
     return xs
 
 
-def disordered_packing(case, x_min: float, x_max: float, z_floor: float) -> Packing:
+def disordered_packing(case, x_min: float, x_max: float, z_floor: float, *, irregular_bed: bool = False,
+                       lattice_start: bool = False) -> Packing:
+    """The start this bench swaps in for `lattice_packing` (the module doc): irregular_bed, row 0 made
+    irregular (--bed irregular); lattice_start, the tool's lattice kept above it (--start lattice)."""
     lat = lattice_packing(case, x_min, x_max, z_floor)
     pitch = 1.02 * case.gradation.d_max
     per_row = int(math.floor((x_max - x_min) / pitch - 0.5))
     n = lat.n
     L = x_max - x_min
     x, z = lat.x.copy(), lat.z.copy()
-    if IRREGULAR_BED:          # the bed (row 0, every grain at its height) made irregular: fewer, at random x
+    if irregular_bed:          # the bed (row 0, every grain at its height) made irregular: fewer, at random x
         keep = int(round(BED_KEEP * per_row))
         x[:keep] = irregular_row(np.random.default_rng(case.seed + 2 * SEED_OFFSET), keep, x_min, L, pitch)
-        if LATTICE_START:      # row 0's other grains go to the next free slots of the lattice, at its top
+        if lattice_start:      # row 0's other grains go to the next free slots of the lattice, at its top
             slots = np.arange(n, n + per_row - keep)
             row, col = slots // per_row, slots % per_row
             x[keep:per_row] = x_min + pitch * (col + 0.5 + 0.5 * (row % 2))
@@ -115,17 +117,16 @@ def main(argv=None) -> int:
     ap.add_argument("--start", choices=["random", "lattice"], default="random",
                     help="lattice (with --bed irregular only): keep the tool's lattice above the bed")
     args = ap.parse_args(argv)
-    global IRREGULAR_BED, LATTICE_START
-    IRREGULAR_BED = args.bed == "irregular"
-    LATTICE_START = args.start == "lattice"
-    if LATTICE_START and not IRREGULAR_BED:
+    irregular, lattice_start = args.bed == "irregular", args.start == "lattice"
+    if lattice_start and not irregular:
         ap.error("--start lattice is the tool's own start: use `campaign run` (only --bed irregular changes it here)")
-    device_mod.lattice_packing = disordered_packing           # this process only
+    device_mod.lattice_packing = functools.partial(disordered_packing, irregular_bed=irregular,
+                                                   lattice_start=lattice_start)   # this process only
     planned = [p for p in ip.plan(ip.load_campaign(args.campaign))
                if p.role == args.test and p.case.gradation.name == args.gradation and p.case.seed in args.seeds]
     from interphase.campaign.runner import run_single
     for p in sorted(planned, key=lambda p: p.case.seed):
-        tag = ("lattice" if LATTICE_START else "disordered") + ("-irregular-bed" if IRREGULAR_BED else "")
+        tag = ("lattice" if lattice_start else "disordered") + ("-irregular-bed" if irregular else "")
         folder = args.out / f"{tag}-{p.label}"
         res = run_single(p.case, "liggghts", folder)
         s = res.get("summary", {})
