@@ -93,6 +93,7 @@ class CriterionModel:
     reasons: dict = field(default_factory=dict)   # why a correlation is missing
     is_default: bool = False
     rule: tuple | None = None    # (a [°], b) of δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases (fit_rule)
+    held_out: dict | None = None  # the chain's error on cases its fits did not see (held_out_errors)
 
     @classmethod
     def study_defaults(cls, friction: float, tan_phi: float | None = None) -> "CriterionModel":
@@ -116,7 +117,8 @@ class CriterionModel:
                 "tan_phi": self.tan_phi if math.isfinite(self.tan_phi) else None,
                 "theta_r": {str(k): fit(f) for k, f in self.theta_r.items()},
                 "ratio": fit(self.ratio), "efficiency": fit(self.efficiency), "reasons": dict(self.reasons),
-                "rule": _finite({"a_deg": self.rule[0], "b": self.rule[1]}) if self.rule else None}
+                "rule": _finite({"a_deg": self.rule[0], "b": self.rule[1]}) if self.rule else None,
+                "held_out": self.held_out}
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "criterion.json") -> "CriterionModel":
@@ -136,7 +138,7 @@ class CriterionModel:
         return cls(source=d["source"], tan_phi=math.nan if d.get("tan_phi") is None else float(d["tan_phi"]),
                    theta_r={("all" if k == "all" else float(k)): fit(v) for k, v in d["theta_r"].items()},
                    ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}),
-                   rule=_rule_of(d.get("rule")))
+                   rule=_rule_of(d.get("rule")), held_out=d.get("held_out"))
 
     @classmethod
     def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
@@ -582,6 +584,26 @@ def skill(df: pd.DataFrame, n_boot: int = 4000) -> pd.DataFrame:
                            rms_gap_hi=float(np.percentile(gap, 97.5)))
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def held_out_errors(checks: pd.DataFrame | None) -> dict | None:
+    """The chain's error on cases its fits did not see, as criterion.json keeps it: the held-out fold
+    of `report.build.criterion_checks` ("group held out", else "surface held out"), one entry per
+    case the chain could take: its group, μs, θa (> 92°) [°], E predicted and error [° of δ] =
+    δ predicted − δ measured (seed means; the case's own tan φ). None without a held-out fold. What
+    `interphase.answer` builds the model's prediction interval from."""
+    if checks is None or "fold" not in checks:
+        return None
+    fold = next((f for f in ("group held out", "surface held out") if (checks["fold"] == f).any()), None)
+    if fold is None:
+        return None
+    g = checks[checks["fold"] == fold].dropna(subset=["error_deg"])
+    num = lambda v: None if not math.isfinite(float(v)) else round(float(v), 6)
+    cases = [{"group": str(r.group), "case": str(r.physical_case), "friction_ps": num(r.friction_ps),
+              "theta_a_deg_92": num(r.theta_a_deg_92), "E_predicted": num(r.E_predicted),
+              "error_deg": num(r.error_deg)} for r in g.itertuples()]
+    return {"fold": fold, "n": len(cases), "n_without": int((checks["fold"] == fold).sum() - len(cases)),
+            "cases": cases}
 
 
 def check_summary(df: pd.DataFrame) -> dict:

@@ -32,7 +32,7 @@ import pandas as pd
 
 from interphase.analysis.correlations import SPECS, SeedEnsemble, fit_study, prepare_points, seed_ensemble
 from interphase.analysis.criterion import (CriterionModel, check_cases, check_summary, fit_rule, fitted_soil_tan_phi,
-                                           skill)
+                                           held_out_errors, skill)
 from interphase.analysis.ensemble_table import ensemble_tables
 from interphase.analysis.soil_test import soil_test_readings
 from interphase.campaign.results import open_campaign, recipe_notes, write_curves, write_summaries
@@ -334,6 +334,7 @@ def analyse(summaries: pd.DataFrame, *, campaign=None, store=None, lab_table=Non
     m.fits = fit_study(points, n_boot=n_boot, seed=seed, ensemble=m.ensemble)
     m.chain = criterion_from_fits(m.fits, points, f"campaign {campaign.name if campaign else 'report'}")
     m.criterion_check = criterion_checks(m.chain, points)
+    m.chain.held_out = held_out_errors(m.criterion_check)
     lab_warning = None
     if lab_table is not None:
         m.lab, lab_warning = _lab_rows(m.chain, lab_table)
