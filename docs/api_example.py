@@ -60,14 +60,14 @@ def main() -> None:
     ens = ip.ensembles(campaign)                      # one row per physical case: its seeds pooled
     print(ens.T.to_string())
 
-    # predict: the criterion chain for a profile file (two columns x z, mm), on the shipped fits
+    # predict: the criterion chain for a profile file (two columns x z, mm), on the study's simulated discs
     profile = folder / "sawtooth.txt"
     x = np.linspace(0.0, 14.0, 57)                    # 45° teeth, Rt = 0.7 mm (1 D50), Sw = 1.4 mm
     z = 0.7 * np.abs(((x / 1.4) % 1.0) - 0.5) * 2.0
     np.savetxt(profile, np.column_stack([x, z]), header="x_mm z_mm")
-    pred = ip.predict(profile, d50_mm=0.7, friction=0.2)
-    print(f"θa {pred['theta_a_deg']:.1f}°, θr {pred['theta_r_deg']:.1f}°, E {pred['efficiency']:.2f}, "
-          f"tan δ {pred['tan_delta']:.3f}")
+    pred = ip.predict(profile, fit="study", d50=0.7e-3, friction=0.2)      # an Answer (interphase.answer)
+    print(f"θa {pred.theta_a_deg:.1f}°, θr {pred.theta_r_deg:.1f}°, E {pred.efficiency:.2f}, "
+          f"tan δ {pred.tan_delta:.3f}, δ {pred.delta_deg:.1f}° ({pred.model_delta_deg_lo:.1f}–{pred.model_delta_deg_hi:.1f}°)")
 
 
 if __name__ == "__main__":

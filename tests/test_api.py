@@ -36,8 +36,8 @@ def test_plan_and_status_from_python(tmp_path):
     assert [p.case_id for p in ip.plan(c, lazy=True)] == [p.case_id for p in planned]
     with pytest.raises(ip.InputError, match="does not exist"):
         ip.status(c, runs=tmp_path / "nothing")
-    with pytest.raises(ip.InputError, match="d50_mm"):
-        ip.predict(ROOT / "campaigns" / "profiles" / "dektak-1.csv", d50_mm=-1, friction=0.2)
+    with pytest.raises(ip.InputError, match="positive diameter"):
+        ip.predict(ROOT / "campaigns" / "profiles" / "dektak-1.csv", d50=-1, friction=0.2, fit="study")
 
 
 @pytest.mark.liggghts

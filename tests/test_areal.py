@@ -172,13 +172,15 @@ def test_predict_reads_an_areal_scan_along_the_axis_it_is_sheared(capsys):
     for axis in ("x", "y"):
         assert main(["theta-a", str(FRT1), "--d50", "0.7", "--axis", axis, "--json"]) == 0
         theta = json.loads(capsys.readouterr().out)["theta_a_deg"]
-        assert main(["predict", str(FRT1), "--d50", "0.7", "--friction", "0.2", "--axis", axis, "--json"]) == 0
+        assert main(["predict", str(FRT1), "--d50", "0.7", "--friction", "0.2", "--axis", axis, "--json",
+                     "--fit", "study"]) == 0
         d = json.loads(capsys.readouterr().out)
         assert d["theta_a_deg_92"] == pytest.approx(theta, rel=1e-12) and math.isfinite(theta)
         assert f"lines along {axis}" in d["flat_spacing_reason"] and not d["flat_spaced"]
         assert d["delta_deg_lo"] < d["delta_deg"] < d["delta_deg_hi"]
     line = Path(__file__).parent / "data" / "dektak-1.csv"
-    assert main(["predict", str(line), "--d50", "0.7", "--friction", "0.2", "--units", "um", "--axis", "y"]) == 2
+    assert main(["predict", str(line), "--d50", "0.7", "--friction", "0.2", "--units", "um", "--axis", "y",
+                 "--fit", "study"]) == 2
     assert "--axis" in capsys.readouterr().err
     card = Path(__file__).parents[1] / "soils" / "karlsruhe-fine-sand-2d.toml"
     assert main(["predict", str(FRT1), "--friction", "0.2", "--soil", str(card), "--simulate"]) == 2

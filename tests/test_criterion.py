@@ -89,21 +89,23 @@ def test_refuses_theta_a_outside_fitted_range(fitted):
 
 
 def test_cli_predict_dektak_is_non_dilative(capsys):
-    code, out, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json", "--fit", "study")
+    code, out, err = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json",
+                          "--fit", "study-figures")
     assert code == 0, err
     d = json.loads(out)
-    assert d["branch"] == "non-dilative" and d["source"] == "study defaults"
+    assert d["branch"] == "non-dilative" and d["fit_source"] == "study defaults"
     assert d["efficiency"] == pytest.approx(math.tan(math.atan(0.2)) / d["tan_phi"])
-    code, text, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--fit", "study")
-    assert code == 0 and "study defaults" in text.lower() and "STUDY DEFAULTS" in text
+    code, text, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um",
+                         "--fit", "study-figures")
+    assert code == 0 and "STUDY DEFAULTS" in text
 
 
 def test_cli_predict_sawtooth_gives_higher_e(capsys, tmp_path):
     prof = tmp_path / "saw45.txt"
     assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
     capsys.readouterr()
-    _, out_flat, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json", "--fit", "study")
-    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--json", "--fit", "study")
+    _, out_flat, _ = _run(capsys, "predict", DEKTAK, "--d50", "0.7", "--friction", "0.2", "--units", "um", "--json", "--fit", "study-figures")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--json", "--fit", "study-figures")
     assert code == 0, err
     saw, flat = json.loads(out), json.loads(out_flat)
     assert saw["branch"].startswith("dilative") and saw["theta_a_deg"] == pytest.approx(39.3, abs=0.5)
@@ -111,9 +113,9 @@ def test_cli_predict_sawtooth_gives_higher_e(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("argv, where", [
-    (["--d50", "0", "--friction", "0.2"], "--d50"),
-    (["--d50", "0.7", "--friction", "-1"], "--friction"),
-    (["--d50", "0.7", "--friction", "0.2", "--tan-phi", "0"], "--tan-phi"),
+    (["--d50", "0", "--friction", "0.2", "--fit", "study"], "--d50"),
+    (["--d50", "0.7", "--friction", "-1", "--fit", "study"], "--friction"),
+    (["--d50", "0.7", "--friction", "0.2", "--tan-phi", "0", "--fit", "study"], "--tan-phi"),
 ])
 def test_cli_predict_bad_input_exit_2(capsys, argv, where):
     code, _, err = _run(capsys, "predict", DEKTAK, "--units", "um", *argv)
@@ -124,13 +126,13 @@ def test_cli_predict_flat_spaced_profile_takes_the_fig_6_9_branch(capsys, tmp_pa
     prof = tmp_path / "spaced.txt"
     assert main(["profile", "spaced", "--rt", "1", "--sw", "2", "--sr", "1", "-o", str(prof)]) == 0
     capsys.readouterr()
-    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--json", "--fit", "study")
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--json",
+                          "--fit", "study-figures")
     assert code == 0, err
     d = json.loads(out)
-    assert d["flat_spaced"] and d["branch"].startswith("flat-spaced") and d["filter"] == 90
-    assert d["theta_a_deg"] == pytest.approx(d["theta_a_deg_90"])
+    assert d["flat_spaced"] and d["branch"].startswith("flat-spaced") and d["theta_a_filter"] == 90
     code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.05", "--filter", "92", "--json",
-                         "--fit", "study")
+                         "--fit", "study-figures")
     assert code == 0 and json.loads(out)["branch"].startswith("dilative")
 
 
@@ -163,30 +165,33 @@ def test_a_fitted_criterion_travels_as_json_with_its_intervals(fitted, tmp_path,
     prof = tmp_path / "saw45.txt"
     assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
     capsys.readouterr()
-    code, text, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", str(path))
+    code, text, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", str(path), "--json")
     assert code == 0, err
-    assert "300 physical cases" in text and "[" in text.split("tan δ")[1].splitlines()[0]   # with its interval
+    d = json.loads(text)
+    assert "300 physical cases" in d["fit_source"] and d["model_delta_deg_lo"] < d["delta_deg"] < d["model_delta_deg_hi"]
 
     path.write_text(json.dumps({"schema": "something else"}))
     code, _, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", str(path))
     assert code == 2 and str(path) in err and "campaign report" in err
 
 
-def test_predict_uses_the_reproduction_fits_by_default(capsys, tmp_path):
-    """No --fit: the reproduction's fits shipped with the package, said so, with intervals; or, while
-    the reproduction lacks a correlation, an exit-2 message naming it."""
+def test_predict_names_the_simulated_soil_it_answers_for(capsys, tmp_path):
+    """No silent fall-back on the study's discs: without --soil or --fit, exit 2 naming both; `--fit
+    study` is the reproduction's fit shipped with the package, its interval owning the held-out error."""
     from interphase.report.build import REPRODUCTION
 
     assert REPRODUCTION.exists(), "the package ships the reproduction's criterion.json"
     prof = tmp_path / "saw45.txt"
     assert main(["profile", "sawtooth", "--rt", "1", "--sw", "2", "-o", str(prof)]) == 0
     capsys.readouterr()
-    code, text, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2")
-    if code == 0:
-        assert "the reproduction's" in text and "STUDY DEFAULTS" not in text
-        assert "[" in text.split("tan δ")[1].splitlines()[0]
-    else:
-        assert code == 2 and "criterion_reproduction.json" in err and "--fit study" in err, err
+    code, _, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2")
+    assert code == 2 and "--soil CARD" in err and "--fit study" in err, err
+    code, out, err = _run(capsys, "predict", str(prof), "--d50", "0.7", "--friction", "0.2", "--fit", "study", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["fit"] == "study" and "study" in d["fit_source"] and "STUDY DEFAULTS" not in " ".join(d["notes"])
+    assert d["parts_deg"]["residual"] > d["parts_deg"]["fit"] > 0
+    assert d["model_delta_deg_lo"] < d["delta_deg"] < d["model_delta_deg_hi"]
 
 
 def test_figs_6_7_and_6_8_take_the_well_graded_cases_when_both_gradations_ran():

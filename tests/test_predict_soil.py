@@ -37,9 +37,11 @@ def test_soil_uses_the_fit_its_card_names_and_its_d50(tmp_path, capsys):
     assert code == 0, same
     assert out["d50_mm"] == 0.14 and out["soil"] == str(card) and out["fit"] == str(FIT)
     assert out["fit_source"].startswith(json.loads(FIT.read_text())["source"])
-    for key in ("theta_a_deg", "efficiency", "tan_delta", "delta_deg", "delta_deg_lo", "delta_deg_hi"):
+    for key in ("theta_a_deg", "efficiency", "tan_delta", "delta_deg", "model_delta_deg_lo", "model_delta_deg_hi"):
         assert out[key] == same[key], key
-    assert out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]
+    # the card's answer owns its misfit against its records; the fit alone has no records
+    assert out["delta_deg_lo"] < out["model_delta_deg_lo"] <= out["delta_deg"] <= out["model_delta_deg_hi"] < out["delta_deg_hi"]
+    assert out["parts_deg"]["card"] > 0 and (same["delta_deg_lo"], same["delta_deg_hi"]) == (same["model_delta_deg_lo"], same["model_delta_deg_hi"])
 
 
 def test_a_card_without_a_fit_or_a_contradicting_d50_is_refused(tmp_path, capsys):
@@ -51,7 +53,7 @@ def test_a_card_without_a_fit_or_a_contradicting_d50_is_refused(tmp_path, capsys
     code, err = _predict(capsys, "--soil", str(card), "--fit", str(FIT))
     assert code == 2 and "not both" in err
     code, err = _predict(capsys)
-    assert code == 2 and "--d50" in err
+    assert code == 2 and "--soil CARD" in err and "--fit study" in err
 
 
 def test_simulate_needs_a_card_and_three_seeds(tmp_path, capsys):
@@ -162,7 +164,7 @@ def test_the_api_answers_as_the_command(tmp_path, capsys):
     capsys.readouterr()
     assert main(["predict", str(saw), "--friction", "0.2", "--soil", str(card), "--json"]) == 0
     cli = json.loads(capsys.readouterr().out)
-    api = ip.predict(saw, friction=0.2, soil=card)
+    api = ip.predict(saw, friction=0.2, soil=card).to_dict()
     for key in ("theta_a_deg", "efficiency", "delta_deg", "delta_deg_lo", "delta_deg_hi", "fit", "soil", "d50_mm"):
         assert api[key] == cli[key], key
     with pytest.raises(ip.InputError, match="not both"):

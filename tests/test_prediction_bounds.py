@@ -19,7 +19,7 @@ from interphase.report.build import criterion_model
 
 ROOT = Path(__file__).resolve().parents[1]
 DEKTAK = str(ROOT / "tests" / "data" / "dektak-1.csv")
-SHIPPED = [None, "study"]          # the reproduction's fits (criterion_reproduction.json) and the study's readings
+SHIPPED = ["study", "study-figures"]   # the reproduction's fits (criterion_reproduction.json) and the study's readings
 
 
 @pytest.fixture(scope="module")
@@ -32,10 +32,10 @@ def saw(tmp_path_factory):
 def test_a_friction_outside_the_fits_exits_2_naming_the_range(saw, capsys):
     capsys.readouterr()
     for mu in ("0.6", "0.9", "0.01"):
-        assert main(["predict", saw, "--d50", "0.7", "--friction", mu, "--json"]) == 2
+        assert main(["predict", saw, "--d50", "0.7", "--friction", mu, "--json", "--fit", "study"]) == 2
         err = capsys.readouterr().err
         assert "--friction" in err and "0.05–0.5" in err and "θa 0.0–73.7°" in err and "Traceback" not in err
-    assert main(["predict", saw, "--d50", "0.7", "--friction", "0.9", "--json", "--fit", "study"]) == 0
+    assert main(["predict", saw, "--d50", "0.7", "--friction", "0.9", "--json", "--fit", "study-figures"]) == 0
 
 
 @pytest.mark.parametrize("fit", SHIPPED)
@@ -56,7 +56,7 @@ def test_on_a_flat_delta_is_atan_mu_never_above(fit, tan_phi):
 def test_monotone_in_friction_and_never_below_the_flat(fit):
     mus = fitted_frictions(criterion_model(0.2, fit)) or [0.05, 0.5]
     grid = np.linspace(mus[0], mus[-1], 19)
-    top = 73.0 if fit is None else 60.0
+    top = 73.0 if fit == "study" else 60.0
     for a in [math.nan, *np.linspace(0.0, top, 30)]:
         deltas = []
         for mu in grid:

@@ -132,7 +132,7 @@ def test_validate_folder_beside_the_lab_file_kept_or_refused(tmp_path, capsys, m
     sums = {p.name: _sha(p) for p in folder.iterdir()}
     assert main(["validate", str(lab)]) == 0                   # the same validation: kept
     assert "kept (unchanged)" in capsys.readouterr().out
-    assert main(["validate", str(lab), "--fit", "study"]) == 2    # another one: refused, nothing replaced
+    assert main(["validate", str(lab), "--fit", "study-figures"]) == 2    # another one: refused, nothing replaced
     err = capsys.readouterr().err
     assert str(folder) in err and "tests-2" in err
     assert {p.name: _sha(p) for p in folder.iterdir()} == sums

@@ -7,8 +7,8 @@
     ip.status(c)                                           # DataFrame, one row per planned case
     df = ip.summaries(c)                                   # DataFrame, one row per finished run
     ens = ip.ensembles(c)                                  # DataFrame, one row per physical case
-    p = ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # dict: θa → θr → E → tan δ
-    p = ip.predict("profile.csv", friction=0.2, soil="soils/karlsruhe-fine-sand-2d.toml")  # the card's own fit
+    a = ip.predict("profile.csv", soil="soils/karlsruhe-fine-sand.toml", friction=0.3, normal_stress=200e3)
+    print(a.paragraph())                                   # Answer: δ, its two intervals and their parts
     d = ip.predict_dem("profile.csv", 0.2, "soils/karlsruhe-fine-sand-2d.toml")  # the DEM instead (runs)
     r = ip.lab_record("lab/soils/karlsruhe-fine-sand/drained-triaxial/TMD11.dat")   # dict: φ_peak, ψ_max, …
 
@@ -115,41 +115,23 @@ def ensembles(campaign, *, runs: PathLike | None = None):
     return campaign_ensembles(c.path, c.output)
 
 
-def predict(profile: PathLike, d50_mm: float | None = None, friction: float | None = None, *,
-            fit: str | None = None, soil: PathLike | None = None, tan_phi: float | None = None,
-            units: str | None = None, axis: str = "x") -> dict:
-    """The criterion chain for a surface profile or areal scan (as `campaign predict --json`): θa →
-    θr → E → tan δ. `d50_mm` [mm], `friction` = tan φμ particle–surface [-]; `fit`: a campaign file,
-    a criterion.json or 'study' (default: the reproduction's fits shipped with the package); `soil`:
-    a soil card instead, whose own fit (`[criterion] fit`) and D50 are used (`d50_mm` may be left
-    out); `tan_phi` of your soil (default: the fit's simulated soil); `axis`: an areal scan's shear
-    direction (+x or +y, every grid line along it pooled). Returns a dict: theta_a_deg,
-    theta_r_deg, efficiency, tan_delta, delta_deg with their intervals, branch, notes, and the fit
-    and soil used."""
-    import math
+def predict(profile: PathLike, *, friction: float | None = None, soil: PathLike | None = None,
+            normal_stress: float | None = None, relative_density: float | None = None,
+            smooth_delta_deg: float | None = None, fit: str | None = None, d50: float | None = None,
+            tan_phi: float | None = None, units: str | None = None, axis: str | None = None,
+            filt: int | None = None):
+    """δ of a sand on a surface (as `campaign predict`): an `interphase.answer.Answer` (`.delta_deg`,
+    `.model_delta_deg_lo/_hi`, `.delta_deg_lo/_hi`, `.parts_deg`, `.paragraph()`, `.to_dict()`).
+    `soil`: your sand's card (path, or a shipped card's name); `friction` = μ = tan φμ [-] or
+    `smooth_delta_deg` [°] on a smooth plate; `normal_stress` [Pa]; `relative_density` [-]. Instead of
+    a card, `fit` ('study', 'study-figures', a criterion.json or a campaign file) with `d50` [m] and
+    optionally `tan_phi` [-]. `axis`: an areal scan's shear direction; `filt`: force the branch (92/90).
+    Bad input raises InputError, as the command refuses it."""
+    from interphase.answer import predict as _predict
 
-    from interphase.analysis.criterion import predict_measured
-    from interphase.errors import InputError
-    from interphase.report.build import criterion_model
-    from interphase.surface.readers import read_scan
-
-    if soil is not None:
-        from interphase.soil import card_d50_mm, criterion_fit, load_card
-
-        if fit is not None:
-            raise InputError("a soil card names its own fit", where="fit", fix="give soil or fit, not both")
-        card = load_card(soil)
-        fit, soil = str(criterion_fit(card)), str(card.path)
-        d50_mm = card_d50_mm(card, d50_mm, "its fit is of that soil", where="d50_mm")
-    if not (isinstance(d50_mm, (int, float)) and math.isfinite(d50_mm) and d50_mm > 0):
-        raise InputError(f"must be a positive diameter in mm, got {d50_mm!r}", where="d50_mm",
-                         fix="give d50_mm, or soil= a card for its D50")
-    if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
-        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where="friction")
-    model = criterion_model(friction, fit, tan_phi)
-    res = predict_measured(model, read_scan(str(profile), units), d50_mm * 1e-3, friction, axis)
-    return res.to_dict() | {"profile": str(profile), "d50_mm": d50_mm, "fit": str(fit) if fit else "reproduction",
-                            "fit_source": model.source, "soil": soil}
+    return _predict(profile, friction=friction, smooth_delta_deg=smooth_delta_deg, soil=soil, fit=fit, d50=d50,
+                    tan_phi=tan_phi, normal_stress=normal_stress, relative_density=relative_density, units=units,
+                    axis=axis, filt=filt)
 
 
 def predict_dem(profile: PathLike, friction: float, soil: PathLike, *, seeds: int = 3,

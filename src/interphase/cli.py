@@ -530,34 +530,39 @@ def _add_report(sub) -> None:
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_pack)
 
-    p = sub.add_parser("predict", help="interface friction from a profile: θa → θr → E → tan δ")
+    p = sub.add_parser("predict", help="the interface friction angle δ of a sand on a surface, with its intervals")
     p.add_argument("profile", help="profile or areal scan: a Dektak export, two columns x z, or any format "
                    "SurfaceTopography reads (an areal scan is read along --axis, every grid line pooled)")
-    p.add_argument("--axis", choices=("x", "y"), default=None,
-                   help="areal scans: shear along +x (default) or +y")
-    p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (default with --soil: the card's)")
-    p.add_argument("--friction", type=float, required=True, help="particle–surface friction tan φμ [-]")
-    p.add_argument("--fit", default=None, help="correlations to use: a campaign file (TOML, fitted on its finished "
-                   "cases), a criterion.json written by `campaign report`, or 'study' (approximate readings of the "
-                   "study's figures); default: the reproduction's fits shipped with the package (docs/reproduction.md)")
     p.add_argument("--soil", default=None, metavar="CARD",
-                   help="a soil card (soils/NAME.toml): the criterion fitted on that soil's own interface runs, "
-                   "which the card names in [criterion] fit, with its tan φ and D50")
+                   help="your sand: a soil card (soils/NAME.toml, or NAME of a shipped card: the 3D one by the sand's "
+                   "name); E from the criterion fitted on its own runs, tan φ from its own soil test at the stress "
+                   "and density asked, δ with the model's and the sand's 95 %% prediction intervals")
+    p.add_argument("--friction", type=float, default=None, metavar="MU",
+                   help="particle–surface friction μ = tan φμ [-]")
+    p.add_argument("--smooth-delta", type=float, default=None, metavar="DEG",
+                   help="instead of --friction: δ [°] the sand reads on a smooth plate of the surface's material "
+                   "(μ = tan of it)")
+    p.add_argument("--normal-stress", type=float, default=None, metavar="PA",
+                   help="normal stress [Pa] (default 100e3); with --soil, tan φ is the card's soil test there")
+    p.add_argument("--relative-density", type=float, default=None, metavar="DR",
+                   help="with --soil: relative density [-] of the sand (default: the card's calibrated state)")
+    p.add_argument("--fit", default=None, help="instead of --soil, a simulated soil's fit: 'study' (the reproduction "
+                   "on the study's discs, tan φ 0.374), 'study-figures' (readings of its figures), a criterion.json "
+                   "written by `campaign report`, or a campaign file; needs --d50")
+    p.add_argument("--d50", type=float, default=None, help="median grain diameter [mm] (with --fit; a card has its own)")
+    p.add_argument("--tan-phi", type=float, default=None,
+                   help="with --fit: tan φ of the soil (a tangent, not degrees; default the fit's simulated soil)")
+    p.add_argument("--axis", choices=("x", "y"), default=None, help="areal scans: shear along +x (default) or +y")
+    p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
+    p.add_argument("--filter", type=int, default=None, choices=(92, 90),
+                   help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
     p.add_argument("--simulate", action="store_true",
                    help="with --soil: run the DEM on the profile with the card's grains instead (a generated "
-                   "campaign in --runs, resumable; in the cell of the campaign the card names in [criterion] "
-                   "campaign, else the campaigns' protocol in the card's D50 units, quasi-2D or 3D as the card)")
+                   "campaign in --runs, resumable; in the cell of the campaign the card names in [criterion] campaign)")
     p.add_argument("--seeds", type=int, default=3, help="--simulate: packing seeds 1…N (default 3)")
-    p.add_argument("--normal-stress", type=float, default=100e3, metavar="PA",
-                   help="--simulate: normal stress [Pa] (default 100e3)")
     p.add_argument("--runs", default=None, metavar="DIR",
                    help="--simulate: runs folder (default runs/predict/<card name> beside the card)")
     p.add_argument("--jobs", type=int, default=None, help="--simulate: cases at a time (default: one per core)")
-    p.add_argument("--filter", type=int, default=None, choices=(92, 90),
-                   help="force the branch: 92 (Fig. 6.8) or 90 (flat-spaced, Fig. 6.9); default: chosen from the profile")
-    p.add_argument("--units", default=None, help="um | mm | m (default: the file's own for a Dektak export, else mm)")
-    p.add_argument("--tan-phi", type=float, default=None, help="tan φ of YOUR granular material (default: the "
-                   "fitted campaign's box tests — the simulated soil —, or tan 30° with the study's readings)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=_cmd_predict)
 
@@ -680,19 +685,6 @@ def _cmd_report(args) -> int:
     return 0
 
 
-def _soil_fit(args) -> tuple[str, str]:
-    """(criterion file, card path) of `predict --soil CARD`: the fit the card names in [criterion] fit;
-    --d50 defaults to the card's and may not contradict it."""
-    from interphase.soil import card_d50_mm, criterion_fit, load_card
-
-    if args.fit is not None:
-        raise InputError("--soil names its own fit", where="--fit", fix="give --soil CARD or --fit FILE, not both")
-    card = load_card(args.soil)
-    path = criterion_fit(card)
-    args.d50 = card_d50_mm(card, args.d50, "its fit is of that soil")
-    return str(path), str(card.path)
-
-
 def _cmd_predict_dem(args) -> int:
     """`campaign predict PROFILE --friction MU --soil CARD --simulate`: the DEM instead of the fit."""
     from pathlib import Path
@@ -704,6 +696,12 @@ def _cmd_predict_dem(args) -> int:
     if args.soil is None:
         raise InputError("--simulate runs the DEM with a soil card's grains", where="--simulate",
                          fix="add --soil CARD (soils/NAME.toml)")
+    if args.normal_stress is None:
+        args.normal_stress = 100e3
+    for flag, value in (("--smooth-delta", args.smooth_delta), ("--relative-density", args.relative_density)):
+        if value is not None:
+            raise InputError(f"{flag} is the criterion's answer; --simulate runs the card at its own preparation",
+                             where=flag, fix=f"drop {flag}, or drop --simulate")
     check_dem_request(args.friction, args.seeds, args.normal_stress, ("--friction", "--seeds", "--normal-stress"))
     for flag, value in (("--fit", args.fit), ("--tan-phi", args.tan_phi), ("--filter", args.filter)):
         if value is not None:
@@ -725,60 +723,19 @@ def _cmd_predict_dem(args) -> int:
 
 
 def _cmd_predict(args) -> int:
-    import math
+    """`campaign predict`: the answer (interphase.answer) printed as one paragraph, or as JSON."""
+    from interphase.api import predict
 
-    from interphase.analysis.criterion import OutOfFitRange, predict_measured
-    from interphase.report.build import criterion_model
-
-    fit, soil = args.fit, None
     if args.simulate:
         return _cmd_predict_dem(args)
-    if args.soil is not None:
-        fit, soil = _soil_fit(args)
-    elif args.d50 is None:
-        raise InputError("no grain size given", where="--d50", fix="give --d50 MM, or --soil CARD for a card's D50")
-    d50 = _d50_m(args.d50)
-    if not (math.isfinite(args.friction) and args.friction >= 0):
-        raise InputError(f"must be a friction coefficient ≥ 0, got {args.friction!r}", where="--friction")
-    if args.tan_phi is not None and not (math.isfinite(args.tan_phi) and args.tan_phi > 0):
-        raise InputError(f"must be > 0, got {args.tan_phi!r}", where="--tan-phi")
-    from interphase.surface.readers import read_scan
-
-    scan = read_scan(args.profile, args.units)
-    model = criterion_model(args.friction, fit, args.tan_phi)
-    try:
-        res = predict_measured(model, scan, d50, args.friction, args.axis, args.filter, where="--axis")
-    except InputError as exc:
-        if soil is None or not isinstance(exc, OutOfFitRange) or scan.areal:   # --simulate takes one line, not a scan
-            raise
-        raise InputError(exc.message, where=exc.where, fix=f"{exc.fix}, or add --simulate to run the DEM on this "
-                         "profile with the card's grains") from exc
-    p, flat_spaced, why = res.prediction, res.flat_spaced, res.flat_spacing_reason
-    out = res.to_dict() | {"profile": args.profile, "d50_mm": args.d50, "fit": str(fit) if fit else "reproduction",
-                           "fit_source": model.source, "soil": soil}
+    ans = predict(args.profile, friction=args.friction, smooth_delta_deg=args.smooth_delta, soil=args.soil,
+                  fit=args.fit, d50=None if args.d50 is None else _d50_m(args.d50), tan_phi=args.tan_phi,
+                  normal_stress=args.normal_stress, relative_density=args.relative_density, units=args.units,
+                  axis=args.axis, filt=args.filter)
     if args.json:
-        _print_json(out)
-        return 0
-    iv = lambda pair, fmt: "" if not all(map(math.isfinite, pair)) else f"  [{pair[0]:{fmt}}, {pair[1]:{fmt}}]"
-    if model.is_default:
-        print("*** STUDY DEFAULTS: approximate readings of the study's published figures, not fitted correlations ***")
-    elif soil is not None:
-        print(f"fits: the soil card {soil}'s own, {fit} ({model.source})")
-    elif args.fit is None:
-        print("fits: the reproduction's (campaigns/precision/study_sequential.toml, seed-bootstrap 95 % intervals; docs/reproduction.md)")
-    if args.tan_phi is None and not model.is_default:
-        print(f"note: tan φ = {model.tan_phi:.3f} is the fitted campaign's simulated soil; give --tan-phi for yours")
-    print(f"profile     {args.profile}  (D50 = {args.d50:g} mm, tan φμ = {args.friction:g}, source: {p.source})")
-    print(f"surface     {'regular flat spacing: ' if flat_spaced else ''}{why}; mean asperity slope {res.mean_slope_deg:.2f}°")
-    print(f"branch      {p.branch}, θa filter {p.filter}")
-    print(f"θa          {p.theta_a_deg:.2f}° from vertical ({p.theta_a_ccw_deg:.2f}° ccw)"
-          + ("  (undefined: non-dilative → 0)" if p.branch == "non-dilative" else ""))
-    print(f"θr          {p.theta_r_deg:.2f}°{iv(p.theta_r_interval, '.2f')}")
-    print(f"E           {p.efficiency:.3f}{iv(p.efficiency_interval, '.3f')}")
-    print(f"tan φ       {p.tan_phi:.3f}")
-    print(f"tan δ       {p.tan_delta:.3f}{iv(p.tan_delta_interval, '.3f')}   δ = {p.delta_deg:.2f}°{iv(p.delta_interval_deg, '.2f')}")
-    for n in p.notes:
-        print(f"note        {n}")
+        _print_json(ans.to_dict())
+    else:
+        print(ans.paragraph())
     return 0
 
 

@@ -94,6 +94,7 @@ class CriterionModel:
     is_default: bool = False
     rule: tuple | None = None    # (a [°], b) of δ = min(φμ + θa − a, atan(b tan φ)) fitted on the same cases (fit_rule)
     held_out: dict | None = None  # the chain's error on cases its fits did not see (held_out_errors)
+    about: dict = field(default_factory=dict)    # what the fits stand on (criterion.json about)
 
     @classmethod
     def study_defaults(cls, friction: float, tan_phi: float | None = None) -> "CriterionModel":
@@ -138,7 +139,7 @@ class CriterionModel:
         return cls(source=d["source"], tan_phi=math.nan if d.get("tan_phi") is None else float(d["tan_phi"]),
                    theta_r={("all" if k == "all" else float(k)): fit(v) for k, v in d["theta_r"].items()},
                    ratio=fit(d.get("ratio")), efficiency=fit(d.get("efficiency")), reasons=d.get("reasons", {}),
-                   rule=_rule_of(d.get("rule")), held_out=d.get("held_out"))
+                   rule=_rule_of(d.get("rule")), held_out=d.get("held_out"), about=d.get("about") or {})
 
     @classmethod
     def from_points(cls, points: pd.DataFrame, source: str, *, n_boot: int = 199, seed: int = 0) -> "CriterionModel":
@@ -277,7 +278,7 @@ def _check_friction(model: CriterionModel, friction: float) -> None:
     if mus and not (mus[0] - 1e-9 <= friction <= mus[-1] + 1e-9):
         raise InputError(f"friction {friction:g} is outside what the fits of {model.source} cover: {coverage(model)}",
                          where="--friction", fix=f"give a friction within {mus[0]:g}–{mus[-1]:g}, fit a campaign that "
-                         "covers it (--fit), or `--fit study` (the study's readings, any friction)")
+                         "covers it (--fit), or `--fit study-figures` (the study's readings, any friction)")
 
 
 def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
@@ -297,7 +298,7 @@ def _pick_theta_r(model: CriterionModel, friction: float, notes: list):
         notes.append(f"no θa–θr fit per friction: the pooled fit (all frictions) is used for {friction:g}")
         return model.theta_r["all"]
     raise InputError(f"no θa–θr correlation in {model.source}: " + model.reasons.get("fig6_8", "no data"),
-                     where="--fit", fix="run more cases, or `--fit study` for the study's readings")
+                     where="--fit", fix="run more cases, or `--fit study-figures` for the study's readings")
 
 
 class OutOfFitRange(InputError):

@@ -151,3 +151,27 @@ def ensemble_tables(summaries: pd.DataFrame, store, *, e_note: float = 1.2) -> t
                         theta_a_deg_92=float(pd.to_numeric(g.get("theta_a_deg_92"), errors="coerce").median()),
                         note="; ".join(notes)))
     return pd.DataFrame(out, columns=COLUMNS), states, pools
+
+
+BOX_COLUMNS = ["physical_id", "case", "normal_stress", "preparation", "seeds", "tan_phi", "tan_phi_lo", "tan_phi_hi",
+               "tan_phi_cs", "tan_phi_cs_lo", "tan_phi_cs_hi"]
+
+
+def box_ensembles(summaries: pd.DataFrame, store) -> pd.DataFrame:
+    """One row per physical box test (its seeds pooled, as an interface case's tan φ is: the bagged
+    ensemble peak and the critical state with their 95 % intervals), with its normal stress [Pa] and
+    preparation: a soil's strength over the states a campaign tested (interphase.card_state)."""
+    if summaries is None or summaries.empty or store is None or "test" not in summaries:
+        return pd.DataFrame(columns=BOX_COLUMNS)
+    rows = summaries.assign(_case=summaries["label"].map(physical_case), _pid=physical_ids(summaries))
+    box = rows[rows["test"].eq("box")]
+    out, memo = [], {}
+    for (name, pid), g in box.groupby(["_case", "_pid"], sort=True):
+        d50 = float(pd.to_numeric(g["d50"], errors="coerce").median()) if "d50" in g else 0.7e-3
+        got, st = _seed_states([str(c) for c in g["case_id"]], store.curve, PEAK_WINDOW_D50 * d50, memo)
+        s = strength_of_states(*st, quantity="tan_phi") if st else ensemble_strength([], PEAK_WINDOW_D50 * d50)
+        num = lambda c: float(pd.to_numeric(g[c], errors="coerce").median()) if c in g else math.nan
+        out.append(dict(physical_id=pid, case=name, normal_stress=num("normal_stress"), preparation=num("preparation"),
+                        seeds=s.n_seeds, tan_phi=s.peak, tan_phi_lo=s.peak_lo, tan_phi_hi=s.peak_hi,
+                        tan_phi_cs=s.critical, tan_phi_cs_lo=s.critical_lo, tan_phi_cs_hi=s.critical_hi))
+    return pd.DataFrame(out, columns=BOX_COLUMNS)

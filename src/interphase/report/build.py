@@ -631,15 +631,16 @@ def load_criterion(path: str | Path) -> CriterionModel:
 
 def criterion_model(friction: float, fit: str | Path | None = None, tan_phi: float | None = None) -> CriterionModel:
     """The model `campaign predict` runs. `fit`: None → the reproduction's fits (REPRODUCTION);
-    'study' → the study defaults for `friction` (readings of its figures); a criterion.json; a
-    campaign file (fitted on its finished cases). `tan_phi` (> 0) replaces the model's tan φ."""
-    if fit == "study":
+    'study' the same, named for what it is (the study's simulated discs); 'study-figures' → the study
+    defaults for `friction` (readings of its figures); a criterion.json; a campaign file (fitted on
+    its finished cases). `tan_phi` (> 0) replaces the model's tan φ."""
+    if fit == "study-figures":
         return CriterionModel.study_defaults(friction, tan_phi)
-    if fit is None or str(fit).endswith(".json"):
-        path = REPRODUCTION if fit is None else Path(fit)
-        if fit is None and not path.exists():
+    if fit in (None, "study") or str(fit).endswith(".json"):
+        path = REPRODUCTION if fit in (None, "study") else Path(fit)
+        if fit in (None, "study") and not path.exists():
             raise InputError(f"this installation has no reproduction fits ({path} is missing)", where="--fit",
-                             fix="give a campaign file or a criterion.json, or `--fit study` for the study's readings")
+                             fix="give a campaign file or a criterion.json, or `--fit study-figures` for the study's readings")
         model = load_criterion(path)
     else:
         model = fitted_model(fit)

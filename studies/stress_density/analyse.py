@@ -1,0 +1,81 @@
+"""The stress-and-density study's tables from its committed runs (no engine): the soil-test strength
+tables the Karlsruhe cards' answers read ([criterion] strength), and E against stress and density.
+
+    python studies/stress_density/analyse.py [--check]
+
+Reads each set's committed summaries.csv and curves.parquet (results/<set>/, written by `campaign
+pack` of the study's runs folders) beside the criterion campaigns' own (docs/reproduction/real_sand/),
+and writes results/strength_3d.csv, results/strength_2d.csv and results/e_2d.csv. --check re-derives
+them and fails if a committed one differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+from interphase.analysis.ensemble_table import box_ensembles, ensemble_table
+from interphase.campaign.results import CommittedCurves
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+CARD_RUNS = {"3d": ROOT / "docs/reproduction/real_sand/3d", "2d": ROOT / "docs/reproduction/real_sand/2d"}
+STUDY_RUNS = {"3d": HERE / "results" / "soil_3d", "2d": HERE / "results" / "e_2d"}
+
+
+def _sets(dim: str):
+    for folder in (CARD_RUNS[dim], STUDY_RUNS[dim]):
+        if (folder / "summaries.csv").exists():
+            yield (pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str}),
+                   CommittedCurves(folder / "curves.parquet"))
+
+
+def strength(dim: str) -> pd.DataFrame:
+    """One row per (stress, preparation) soil test; a state measured in both sets is read from the
+    one with more seeds (the study restores the criterion campaign's runs of the same id)."""
+    rows = pd.concat([box_ensembles(s, c) for s, c in _sets(dim)], ignore_index=True)
+    rows = rows.sort_values("seeds").drop_duplicates(["normal_stress", "preparation"], keep="last")
+    cols = ["normal_stress", "preparation", "tan_phi", "tan_phi_lo", "tan_phi_hi", "seeds", "tan_phi_cs",
+            "tan_phi_cs_lo", "tan_phi_cs_hi"]
+    return rows.sort_values(["preparation", "normal_stress"])[cols].round(6).reset_index(drop=True)
+
+
+def e_table() -> pd.DataFrame:
+    """E, tan δ and tan φ with their intervals per physical case of the quasi-2D E study."""
+    folder = STUDY_RUNS["2d"]
+    if not (folder / "summaries.csv").exists():
+        return pd.DataFrame()
+    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str})
+    ens = ensemble_table(summ, CommittedCurves(folder / "curves.parquet"))
+    state = summ.drop_duplicates("physical_id").set_index("physical_id")[["normal_stress", "preparation", "rt"]]
+    cols = ["rt", "normal_stress", "preparation", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi",
+            "tan_phi", "tan_phi_lo", "tan_phi_hi", "E", "E_lo", "E_hi", "theta_r_deg"]
+    return ens.join(state, on="physical_id")[cols].sort_values(["rt", "preparation", "normal_stress"]).round(6)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true", help="fail if a committed table differs from its re-derivation")
+    args = ap.parse_args(argv)
+    tables = {"strength_3d.csv": strength("3d"), "strength_2d.csv": strength("2d"), "e_2d.csv": e_table()}
+    bad = []
+    for name, df in tables.items():
+        path = HERE / "results" / name
+        text = df.to_csv(index=False)
+        if args.check:
+            if not path.exists() or path.read_text() != text:
+                bad.append(name)
+        elif len(df):
+            path.write_text(text)
+        print(f"{name}:\n{df.to_string(index=False)}\n")
+    if bad:
+        print(f"differs from the committed table: {', '.join(bad)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
