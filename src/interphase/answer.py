@@ -281,18 +281,13 @@ def predict(profile, *, friction: float | None = None, smooth_delta_deg: float |
 
 
 def load_soil(soil):
-    """A soil card by path, or by name from the shipped soils/ (the 3D card by the sand's plain name);
-    a laboratory record given instead is refused with the way to a card."""
+    """A soil card by path, or by name from the shipped soils/ (the 3D card by the sand's plain name)."""
     from interphase.soil import load_card
 
     p = Path(soil)
     if not p.exists() and not p.suffix:
         shipped = Path(__file__).resolve().parents[2] / "soils" / f"{soil}.toml"
         p = shipped if shipped.exists() else p
-    if p.suffix.lower() in (".dat", ".csv", ".txt", ".xlsx"):
-        raise InputError("a laboratory record, not a soil card", where=f"--soil {soil}",
-                         fix="calibrate a card on it: `campaign lab-record FILE`, then a target and `campaign calibrate` "
-                             "(docs/answer.md, 'From a record to an answer'); or give a card, soils/NAME.toml")
     return load_card(p)
 
 

@@ -76,22 +76,31 @@ def _add_surface(sub) -> None:
     q.set_defaults(func=_cmd_profile_plot)
 
 
-def _d50_m(value: float) -> float:
+def _d50_m(value: float | None) -> float:
     import math
 
+    if value is None:
+        raise InputError("no grain size given", where="--d50",
+                         fix="give --d50 MM, the grains' median diameter: θa is read with a disc of that size")
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"must be a positive diameter in mm, got {value!r}", where="--d50")
     return value * 1e-3
 
 
 def _output_path(path: str) -> str:
-    """Refuse an output file whose folder does not exist before any work is done."""
+    """Refuse, before any work is done, an output file that exists (nothing a user owns is
+    overwritten: a new name is suggested) or whose folder does not."""
     from pathlib import Path
+
+    from interphase.campaign.folders import next_free
 
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise InputError(f"folder {str(parent)!r} does not exist", where=f"-o {path}",
                          fix="create the folder first or write somewhere else")
+    if Path(path).exists():
+        raise InputError(f"{path} exists; it is kept as it is", where=f"-o {path}",
+                         fix=f"write to a new name, e.g. -o {next_free(path)}")
     return path
 
 

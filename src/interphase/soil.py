@@ -171,6 +171,10 @@ def element_fields(table: dict, bad) -> dict:
 
 def load_card(path) -> SoilCard:
     """Read and check a soil card. Every problem is an InputError naming the file, line and field."""
+    if Path(path).suffix.lower() in (".dat", ".csv", ".txt", ".xlsx", ".xls"):
+        raise InputError("a laboratory record, not a soil card", where=str(path),
+                         fix="read it with `campaign lab-record`, calibrate a card on it (`campaign calibrate "
+                             "TARGET.toml`; docs/answer.md, from a record to an answer), or give soils/NAME.toml")
     p, text, data, bad = read_toml(path, "soil card", "give the path of a soils/NAME.toml card "
                                    "(`campaign calibrate TARGET.toml` writes one)")
     for key in data:
@@ -243,7 +247,16 @@ def _check_cell(card: SoilCard, bad) -> None:
 
 def merge_soil(table: dict, card: SoilCard, where: str) -> dict:
     """A campaign's [case] table with the card's soil fields filled in; a field in both is an error
-    naming both places."""
+    naming both places, and so is a card calibrated in 3D (triaxial cell) in a quasi-2D device, or a
+    quasi-2D card (biaxial cell, discs) in the 3D one: its grains are another material there."""
+    device = table.get("device", "walled")
+    calibrated_in = card.extra.get("cell", {}).get("test")      # a card calibrated by the box test has none
+    if calibrated_in is not None and (calibrated_in == "triaxial") != (device == "periodic3d"):
+        dim, other = ("3D", "quasi-2D") if card.cell["test"] == "triaxial" else ("quasi-2D", "3D")
+        raise InputError(f"the soil card {card.path} is calibrated in {dim} (its [cell] test is {card.cell['test']}), "
+                         f"the device {device!r} is {other}", where=f"{where}.device",
+                         fix='use device = "periodic3d" for a 3D card and "periodic" for a quasi-2D one, or the '
+                             f"sand's {other} card")
     both = sorted(set(table) & set(card.soil))
     if both:
         raise InputError(f"{both[0]!r} is set here and in the soil card {card.path}", where=where,

@@ -66,6 +66,8 @@ def main(argv=None) -> int:
         path = HERE / "results" / name
         text = df.to_csv(index=False)
         if args.check:
+            if df.empty and not path.exists():          # a set not packed yet: nothing to hold
+                continue
             if not path.exists() or path.read_text() != text:
                 bad.append(name)
         elif len(df):

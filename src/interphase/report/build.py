@@ -584,15 +584,34 @@ def _clean(d: dict) -> dict:
 
 def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: str | Path | None = None,
                  n_boot: int = 199, output: str | Path | None = None, engines=None) -> ReportResult:
-    """The report of a campaign's finished runs (`engines`: as results.open_campaign)."""
+    """The report of a campaign's finished runs (`engines`: as results.open_campaign) in `out`
+    (default RUNS/report). A report already there is never replaced: a given `out` that holds one is
+    refused (InputError, a new name suggested); the default folder moves on to report-2, report-3, …"""
     campaign, store, summ = open_campaign(campaign_path, output, engines)
+    folder = _report_folder(out, Path(campaign.output) / "report")
     try:
-        res = report_from_summaries(summ, out or Path(campaign.output) / "report", campaign=campaign, store=store,
+        res = report_from_summaries(summ, folder, campaign=campaign, store=store,
                                     lab=lab, n_boot=n_boot)
     finally:
         store.close()
     res.warnings.extend(recipe_notes(summ.attrs))
     return res
+
+
+def _report_folder(out, default: Path) -> Path:
+    from interphase.campaign.folders import next_free
+
+    taken = lambda p: p.is_dir() and any(p.iterdir())
+    if out is None:
+        folder = default
+        n = 2
+        while taken(folder):
+            folder, n = default.with_name(f"{default.name}-{n}"), n + 1
+        return folder
+    if taken(Path(out)):
+        raise InputError(f"{out} is not empty; what it holds is kept", where=f"-o {out}",
+                         fix=f"write the report to a new folder, e.g. -o {next_free(out)}")
+    return Path(out)
 
 
 def fitted_model(campaign_path: str | Path, n_boot: int = 199) -> CriterionModel:
