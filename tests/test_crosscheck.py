@@ -246,13 +246,20 @@ def test_exit_state_passes_only_when_every_judged_row_agrees():
     assert not _report(agree | differ).passed
     assert not _report(agree, missing=[("c-s4", "yade", "failed")]).passed
     assert _report(agree | differ).counts() == {"agree": 1, "differ": 1, "undecided": 0}
+    # the words say which: undecided is no failure of an engine but a want of seeds
+    assert _report(agree).outcome.startswith("agree")
+    assert _report(agree | differ).outcome.startswith("differ: 1 of")
+    assert _report(agree, missing=[("c-s4", "yade", "failed")]).outcome.startswith("incomplete")
+    u = _report(agree | undecided)
+    more = int(u.judged.loc[u.judged["verdict"] == "undecided", "more_seeds"].max())
+    assert u.outcome.startswith(f"undecided: {more} more seeds") and more > 0
 
 
 def test_markdown_and_json_carry_interval_verdict_and_seeds_needed():
     rep = _report(_runs([0.50, 0.55, 0.45], [0.53, 0.50, 0.52], name="u"))
     md = rep.markdown()
     assert "| u | peak_stress_ratio | 3 |" in md and "**undecided**" in md and "more)" in md
-    assert "verdict: FAIL" in md and "u-s1" not in md             # per-seed rows only with all_rows
+    assert "verdict: undecided: " in md and "more seeds" in md and "FAIL" not in md and "u-s1" not in md             # per-seed rows only with all_rows
     assert "u-s1" in rep.markdown(all_rows=True)
     data = json.loads(json.dumps(rep.to_json()))
     row = next(r for r in data["rows"] if r["metric"] == "peak_stress_ratio")

@@ -511,8 +511,7 @@ def _cmd_crosscheck(args) -> int:
     else:
         print(report.markdown())
         print(f"tolerances: {report.tolerances}; table written to {report.output / 'crosscheck.csv'} and .md")
-        print("PASS: every judged metric agrees" if report.passed else
-              "FAIL: a metric differs or is undecided, or a case has no result (see the verdicts above)")
+        print(f"verdict: {report.outcome} (the rows above)")
     return 0 if report.passed else 1
 
 

@@ -188,9 +188,25 @@ class CrosscheckReport:
         j = self.judged
         return not self.missing and len(j) > 0 and bool((j["verdict"] == "agree").all())
 
+    @property
+    def outcome(self) -> str:
+        """In words: "agree" (every judged row agrees, every case finished), "differ: …" (a row is
+        decided apart), "incomplete: …" (a case has no result), else "undecided: N more seeds" (the
+        most any undecided row needs: the engines are not shown apart, the seeds would tell)."""
+        j, c = self.judged, self.counts()
+        if self.passed:
+            return "agree: every judged metric"
+        if c["differ"]:
+            return f"differ: {c['differ']} of {len(j)} judged rows"
+        if self.missing or not len(j):
+            return f"incomplete: {len(self.missing)} case runs without a result"
+        more = pd.to_numeric(j.loc[j["verdict"] == "undecided", "more_seeds"], errors="coerce").dropna()
+        need = f"{int(more.max())} more seeds" if len(more) else "more seeds (how many: not estimable from these)"
+        return f"undecided: {need} ({c['undecided']} of {len(j)} rows undecided, none differ)"
+
     def summary(self) -> str:
         c = self.counts()
-        return (f"verdict: {'PASS' if self.passed else 'FAIL'} — {len(self.judged)} judged rows (physical case × "
+        return (f"verdict: {self.outcome} — {len(self.judged)} judged rows (physical case × "
                 f"metric): {c['agree']} agree, {c['differ']} differ, {c['undecided']} undecided; "
                 f"{len(self.missing)} case runs without a result")
 
@@ -219,7 +235,8 @@ class CrosscheckReport:
         def records(t):
             return t.astype(object).where(t.notna(), None).to_dict(orient="records")
         return {"campaign": self.campaign, "output": str(self.output), "tolerances": self.tolerances,
-                "passed": self.passed, "verdicts": self.counts(), "missing": [list(m) for m in self.missing],
+                "passed": self.passed, "outcome": self.outcome, "verdicts": self.counts(),
+                "missing": [list(m) for m in self.missing],
                 "rows": records(self.ensembles), "seed_rows": records(self.seeds)}
 
 
