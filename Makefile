@@ -14,7 +14,7 @@ SLURM_DEBS := munge slurmctld slurmd slurm-client
 REPORT_DEBS := texlive-latex-base texlive-latex-recommended poppler-utils chromium
 BINS := liggghts yade munged slurmctld slurmd sbatch pdflatex pdftotext pdffonts chromium
 
-.PHONY: all deps debs venv test run bench clean
+.PHONY: all deps debs venv test run bench flaky-check clean
 
 all: test
 
@@ -55,6 +55,12 @@ run: deps
 # each benchmark prints its own Markdown table for BENCHMARKS.md
 bench: deps
 	@for f in bench/bench_*.py; do echo "== $$f"; $(PY) $$f || exit 1; done
+
+# the suite in fresh clones, 5 times idle then 5 times beside two LIGGGHTS runs: a verdict that
+# depends on chance shows here (bench/flaky_check.py; results in BENCHMARKS.md)
+flaky-check: deps
+	$(PY) bench/flaky_check.py --runs 5
+	$(PY) bench/flaky_check.py --runs 5 --load 2
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

@@ -95,7 +95,7 @@ def _failures(junit: Path) -> tuple[dict, list[dict]]:
     return counts, failed
 
 
-def one_run(i: int, work: Path, tier: str, load: int, keep: bool) -> dict:
+def one_run(i: int, work: Path, tier: str, load: int, keep: bool, beside: str = "") -> dict:
     clone = work / f"clone-{i}"
     shutil.rmtree(clone, ignore_errors=True)
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
@@ -121,7 +121,7 @@ def one_run(i: int, work: Path, tier: str, load: int, keep: bool) -> dict:
         _stop_load(procs)
     wall = time.monotonic() - t0
     counts, failed = _failures(junit)
-    rec = {"run": i, "commit": head, "tier": tier, "load": load, "rc": proc.returncode,
+    rec = {"run": i, "commit": head, "tier": tier, "load": load, "beside": beside, "rc": proc.returncode,
            "wall_s": round(wall, 1), "mean_load1": round(sum(loads) / max(len(loads), 1), 2),
            "date": time.strftime("%Y-%m-%d %H:%M"), **counts, "failures": failed}
     if not keep and proc.returncode == 0:
@@ -136,7 +136,8 @@ def table(records: list[dict]) -> str:
         m, s = divmod(int(round(r["wall_s"])), 60)
         res = f"{r.get('passed', 0)} passed, {r.get('failed', 0) + r.get('error', 0)} failed"
         bad = "; ".join(f["test"] for f in r["failures"]) or "—"
-        rows.append(f"| {r['run']} | {r['commit']} | {r['tier']} | {r['load']} engine runs | {res} | "
+        beside = r.get("beside") or (f"{r['load']} LIGGGHTS loops" if r["load"] else "nothing")
+        rows.append(f"| {r['run']} | {r['commit']} | {r['tier']} | {beside} | {res} | "
                     f"{m} min {s:02d} s | {r['mean_load1']} | {bad} |")
     return "\n".join(rows)
 
@@ -149,13 +150,15 @@ def main(argv=None) -> int:
     ap.add_argument("--work", type=Path, default=Path(tempfile.gettempdir()) / "flaky-check")
     ap.add_argument("--out", type=Path, default=None, help="JSON lines appended here (default WORK/runs.jsonl)")
     ap.add_argument("--keep", action="store_true", help="keep every clone, not only those that failed")
+    ap.add_argument("--beside", default="", help="what else runs on the machine meanwhile (recorded, e.g. "
+                    "'campaign X, 2 jobs')")
     a = ap.parse_args(argv)
     a.work.mkdir(parents=True, exist_ok=True)
     out = a.out or a.work / "runs.jsonl"
     start = sum(1 for _ in open(out)) if out.exists() else 0
     records = []
     for k in range(a.runs):
-        rec = one_run(start + k + 1, a.work, a.tier, a.load, a.keep)
+        rec = one_run(start + k + 1, a.work, a.tier, a.load, a.keep, a.beside)
         records.append(rec)
         with open(out, "a") as fh:
             fh.write(json.dumps(rec) + "\n")
