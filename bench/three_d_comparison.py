@@ -184,7 +184,7 @@ def main(campaign: Path, save: Path | None) -> None:
 def _predicted(row, tan_phi: float) -> tuple[float, str]:
     """θa of the areal surface's traces along the shear, and the shipped fits' E (θr) at tan φ."""
     from interphase.analysis.criterion import predict
-    from interphase.report.build import criterion_model
+    from interphase.criterion_fits import criterion_model
     from interphase.surface.areal import theta_a_lines
 
     from interphase.campaign.schema import load_campaign

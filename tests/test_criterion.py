@@ -148,7 +148,7 @@ def test_cli_predict_fit_without_enough_cases_says_why(capsys, quick_campaign):
 def test_a_fitted_criterion_travels_as_json_with_its_intervals(fitted, tmp_path, capsys):
     """criterion.json (what `campaign report` writes and the package ships for the reproduction)
     gives back the same chain: predictions and bootstrap intervals on every branch."""
-    from interphase.report.build import load_criterion
+    from interphase.criterion_fits import load_criterion
 
     path = tmp_path / "criterion.json"
     path.write_text(json.dumps(fitted.to_dict({"physical_cases": 300, "groups": ["g1"]}), allow_nan=False))
@@ -178,7 +178,7 @@ def test_a_fitted_criterion_travels_as_json_with_its_intervals(fitted, tmp_path,
 def test_predict_names_the_simulated_soil_it_answers_for(capsys, tmp_path):
     """No silent fall-back on the study's discs: without --soil or --fit, exit 2 naming both; `--fit
     study` is the reproduction's fit shipped with the package, its interval owning the held-out error."""
-    from interphase.report.build import REPRODUCTION
+    from interphase.criterion_fits import REPRODUCTION
 
     assert REPRODUCTION.exists(), "the package ships the reproduction's criterion.json"
     prof = tmp_path / "saw45.txt"

@@ -15,7 +15,7 @@ import pytest
 
 from interphase.analysis.criterion import fitted_frictions, predict
 from interphase.cli import main
-from interphase.report.build import criterion_model
+from interphase.criterion_fits import criterion_model
 
 ROOT = Path(__file__).resolve().parents[1]
 DEKTAK = str(ROOT / "tests" / "data" / "dektak-1.csv")

@@ -262,7 +262,7 @@ def test_the_criterion_is_checked_against_every_case_in_sample_and_group_held_ou
     out of the fits; the table says the error distribution and the largest miss; criterion.json is
     written and reads back as the same chain."""
     from interphase.analysis.criterion import check_summary, predict
-    from interphase.report.build import load_criterion
+    from interphase.criterion_fits import load_criterion
 
     out, res, summ = synthetic_report
     checks = res.criterion_check

@@ -98,7 +98,7 @@ def test_validate_prints_criterion_and_baselines(tmp_path, capsys, monkeypatch):
         assert r["error_predicted_deg"] == pytest.approx(r["delta_predicted_deg"] - r["delta_measured_deg"])
     fitted = "δ = min(φμ + θa − a, atan(b tan φ)), a, b fitted with the criterion"
     assert {s["prediction"] for s in res["skill"]} == {"criterion", "δ = φ (soil)", "δ = min(φμ + θa, φ)", fitted}
-    from interphase.report.build import REPRODUCTION, load_criterion
+    from interphase.criterion_fits import REPRODUCTION, load_criterion
 
     a, b = load_criterion(REPRODUCTION).rule           # the shipped criterion's two constants
     assert flat["delta_fitted_rule_deg"] == pytest.approx(
@@ -135,7 +135,7 @@ def test_simulate_runs_each_row_on_the_card_and_resumes(simulated_rows):
     synthetic saw-tooth row and one flat row, one seed each; a second call reruns nothing."""
     from interphase.analysis.validation import predict_rows
     from interphase.campaign.validate import simulate, with_dem
-    from interphase.report.build import criterion_model
+    from interphase.criterion_fits import criterion_model
 
     table, card, out, tiny, dem = simulated_rows
     assert sorted(dem["row"]) == [2, 3]

@@ -234,7 +234,7 @@ def predict(profile, *, friction: float | None = None, smooth_delta_deg: float |
     density, or with `fit` ('study', 'study-figures', a criterion.json or a campaign file) on a
     simulated soil of grain size `d50` [m]. Every refusal is an InputError naming the option."""
     from interphase.analysis.criterion import OutOfFitRange, predict_measured
-    from interphase.report.build import criterion_model
+    from interphase.criterion_fits import criterion_model
 
     mu = friction_from(friction, smooth_delta_deg)
     check_tan_phi(tan_phi)

@@ -260,7 +260,7 @@ def validate(lab: PathLike, *, soil: PathLike | None = None, fit: str | None = N
     from interphase.analysis.validation import largest_miss, predict_rows, skill
     from interphase.campaign.folders import validate_folders
     from interphase.lab import read_lab
-    from interphase.report.build import criterion_model
+    from interphase.criterion_fits import criterion_model
 
     table = read_lab(lab)
     (out, out_from), (runs_at, runs_from) = validate_folders(table.path, output, runs)
