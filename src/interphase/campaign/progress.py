@@ -1,13 +1,24 @@
 """Progress display of a campaign run: a live rich table on a terminal, plain lines otherwise.
 
-Per case: state (queued, running, done, failed, killed, interrupted), elapsed time; overall: counts
-and an ETA = remaining cases × mean duration of the cases finished in this run / parallel slots.
+Per case: state (queued, running, done, failed, killed, interrupted), elapsed time and, while it runs,
+how far its engine has got (`stage_of`: e.g. "shear 40 %", read from the case's own files by
+engines.progress); overall: counts and an ETA = remaining cases × mean duration of the cases
+finished in this run / parallel slots. Plain lines say a running case's stage within TICK seconds of
+its start, then again at each new stage and each further tenth of it.
 """
 
 from __future__ import annotations
 
 import sys
+import threading
 import time
+
+TICK = 5.0                  # [s] how often a running case's stage is read (plain lines)
+
+
+def _stage_text(stage) -> str:
+    name, share = stage
+    return name if share is None else f"{name} {100 * share:.0f} %"
 
 
 def _fmt_s(seconds: float | None) -> str:
@@ -25,8 +36,14 @@ class Progress:
     STYLE = {"queued": "dim", "running": "cyan", "done": "green", "failed": "red", "killed": "magenta",
              "interrupted": "yellow", "pending": "dim"}
 
-    def __init__(self, items, slots: int, stream=None, live: bool | None = None, title: str = ""):
+    def __init__(self, items, slots: int, stream=None, live: bool | None = None, title: str = "",
+                 stage_of=None):
         self.stream = stream or sys.stdout
+        self.stage_of = stage_of            # case id → its running engine's stage in words, or None
+        self._said: dict[str, tuple] = {}
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._ticker = None
         self.items = {p.case_id: p for p in items}
         self.state = {cid: "queued" for cid in self.items}
         self.t0: dict[str, float] = {}
@@ -76,16 +93,40 @@ class Progress:
             self._live.__enter__()
         else:
             self._line(f"{self.title} {len(self.items)} cases to run, {self.slots} at a time")
+            if self.stage_of is not None:
+                self._ticker = threading.Thread(target=self._tick, daemon=True)
+                self._ticker.start()
         return self
 
+    def _tick(self) -> None:
+        while not self._stop.wait(TICK):
+            for cid in [c for c, s in list(self.state.items()) if s == "running"]:
+                try:
+                    stage = self.stage_of(cid)
+                except Exception:          # a half-written file: the next tick reads it again
+                    continue
+                if stage is None:
+                    continue
+                name, share = stage
+                key = (name, None if share is None else int(10 * share))
+                if self._said.get(cid) != key:
+                    self._said[cid] = key
+                    p = self.items.get(cid)
+                    el = time.monotonic() - self.t0.get(cid, time.monotonic())
+                    self._line(f"  at     {cid}  {p.label if p else ''}  {_stage_text(stage)}  ({_fmt_s(el)})")
+
     def __exit__(self, *exc):
+        self._stop.set()
+        if self._ticker is not None:
+            self._ticker.join(timeout=2 * TICK)
         if self._live is not None:
             self._live.__exit__(*exc)
             self._live = None
         self._line(self.headline())
 
     def _line(self, text: str) -> None:
-        print(text, file=self.stream, flush=True)
+        with self._lock:
+            print(text, file=self.stream, flush=True)
 
     def event(self, kind: str, case_id: str, info: dict) -> None:
         p = self.items.get(case_id)
@@ -121,19 +162,28 @@ class Progress:
                 self._line(f"  {status:<11} {case_id}  {label}  {_fmt_s(el)}  ({n}/{len(self.items)}, "
                            f"ETA {_fmt_s(self.eta())}){extra}")
 
+    def _stage(self, cid: str):
+        if self.stage_of is None:
+            return None
+        try:
+            return self.stage_of(cid)
+        except Exception:                  # a half-written file: the next refresh reads it again
+            return None
+
     def _table(self):
         from rich.table import Table
 
         t = Table(title=self.headline(), expand=False)
-        for col in ("case", "label", "state", "time", "cause"):
+        for col in ("case", "label", "state", "time", "progress", "cause"):
             t.add_column(col)
         order = {"running": 0, "failed": 1, "killed": 1, "interrupted": 1, "queued": 2, "done": 3}
         shown = sorted(self.items, key=lambda c: (order.get(self.state[c], 4), self.items[c].index))[:30]
         for cid in shown:
             s = self.state[cid]
             el = (time.monotonic() - self.t0[cid]) if s == "running" and cid in self.t0 else self.elapsed.get(cid)
+            stage = self._stage(cid) if s == "running" else None
             t.add_row(cid, self.items[cid].label, f"[{self.STYLE.get(s, '')}]{s}[/]", _fmt_s(el),
-                      self.cause.get(cid, ""))
+                      _stage_text(stage) if stage else "", self.cause.get(cid, ""))
         if len(self.items) > len(shown):
             t.caption = f"… {len(self.items) - len(shown)} more"
         return t

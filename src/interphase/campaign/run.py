@@ -322,7 +322,9 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
                            job_name=f"interphase-{campaign.name}",
                            time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
                                                                       campaign.execution.time_limit))
-    progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name)
+    progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name,
+                        stage_of=lambda cid: _stage_of(store.case_folder(cid)))
+    print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), min(slots, len(todo))), file=stream, flush=True)
 
     index_trouble: list[str] = []
 
@@ -537,6 +539,14 @@ def _dry_action(cid: str, folder, indexed: dict, stale: dict, record: set, activ
 
 #: finished runs of the campaign a dry run reads to scale its estimate (their case.json)
 CALIBRATION_RUNS = 200
+
+
+def _stage_of(folder):
+    """(stage, share done) of the engine running in a case folder (engines.progress), or None."""
+    from interphase.engines.progress import liggghts_stage
+
+    st_ = liggghts_stage(folder)
+    return None if st_ is None else (st_.name, st_.share)
 
 
 def _time_estimate(seconds: float, slots: int, measured=(0, 0.0, 0.0)) -> str:
