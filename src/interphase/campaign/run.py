@@ -322,9 +322,7 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
                            job_name=f"interphase-{campaign.name}",
                            time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
                                                                       campaign.execution.time_limit))
-    progress = Progress(todo, min(slots, len(todo)), stream=stream, live=live, title=campaign.name,
-                        stage_of=lambda cid: _stage_of(store.case_folder(cid)))
-    print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), min(slots, len(todo))), file=stream, flush=True)
+    progress = _progress(campaign, todo, store, min(slots, len(todo)), stream, live)
 
     index_trouble: list[str] = []
 
@@ -539,6 +537,14 @@ def _dry_action(cid: str, folder, indexed: dict, stale: dict, record: set, activ
 
 #: finished runs of the campaign a dry run reads to scale its estimate (their case.json)
 CALIBRATION_RUNS = 200
+
+
+def _progress(campaign: Campaign, todo: list, store, slots: int, stream, live) -> Progress:
+    """The run's progress display, each running case's engine stage read from its folder; the
+    time estimate printed before the first case starts."""
+    print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), slots), file=stream, flush=True)
+    return Progress(todo, slots, stream=stream, live=live, title=campaign.name,
+                    stage_of=lambda cid: _stage_of(store.case_folder(cid)))
 
 
 def _stage_of(folder):
