@@ -13,7 +13,7 @@ import sys
 import threading
 import time
 
-TICK = 5.0                  # [s] how often a running case's stage is read (plain lines)
+TICK = 1.0                  # [s] how often a running case's stage is read (plain lines; a few tail bytes)
 
 
 def _stage_text(stage) -> str:
