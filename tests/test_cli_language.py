@@ -39,7 +39,7 @@ def _option_groups(p) -> list[set]:
 
 def _readme_rows() -> dict[str, str]:
     """{command: the first cell of its row} of the README's command table."""
-    text = (ROOT / "README.md").read_text().split("## Commands", 1)[1].split("\n## ", 1)[0]
+    text = (ROOT / "docs" / "cli.md").read_text().split("## Commands", 1)[1].split("\n## ", 1)[0]
     rows = {}
     for line in text.splitlines():
         m = re.match(r"^\| `campaign ([a-z-]+)(.*?)` \|", line)

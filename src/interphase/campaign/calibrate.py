@@ -358,11 +358,24 @@ def calibrate(target_path, *, quick: bool = False, card_path=None, output=None, 
     return result
 
 
+def grainlearning():
+    """(BayesianCalibration, DynamicSystem) of GrainLearning; a missing install is an error that says
+    how to install it (its numpy < 2 pin keeps `pip install grainlearning` from resolving beside this
+    project's numpy 2 stack; it runs on numpy 2 with the same posterior: docs/soils.md)."""
+    try:
+        from grainlearning import BayesianCalibration
+        from grainlearning.dynamic_systems import DynamicSystem
+    except ImportError:
+        raise InputError("GrainLearning is not installed: calibration needs it", where="campaign calibrate",
+                         fix="`make venv` installs it, or `pip install --no-deps grainlearning==2.0.5` "
+                             "(its other needs come with this project)") from None
+    return BayesianCalibration, DynamicSystem
+
+
 def _sample(plan: Plan, executor, jobs, stream, rerun_failed: bool):
     """GrainLearning's iterations, each sample's element tests run as a generated campaign:
     (the calibration object, every sample's row, [runs made])."""
-    from grainlearning import BayesianCalibration
-    from grainlearning.dynamic_systems import DynamicSystem
+    BayesianCalibration, DynamicSystem = grainlearning()
 
     target, budget = plan.target, plan.budget
     names = list(target.free)

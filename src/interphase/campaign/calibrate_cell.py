@@ -47,7 +47,7 @@ import tomli_w
 from interphase.analysis.cell_ensemble import at_critical_state
 from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
-from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare, sample_rows
+from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare, grainlearning, sample_rows
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.campaign.restore import restoring
 from interphase.errors import InputError
@@ -172,8 +172,7 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
             rerun_failed):
     """GrainLearning's iterations; each sample's cell tests (and its e_max token) run as generated
     campaigns. Returns (calibration object, every sample's row, runs made)."""
-    from grainlearning import BayesianCalibration
-    from grainlearning.dynamic_systems import DynamicSystem
+    BayesianCalibration, DynamicSystem = grainlearning()
 
     from interphase.campaign.cell import cell_of
     from interphase.campaign.density import TOKEN_STRAIN
