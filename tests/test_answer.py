@@ -189,3 +189,12 @@ def test_report_onto_an_existing_folder_leaves_it_byte_identical(quick_campaign,
     before = sums()
     code, _, err = _run(capsys, "report", quick_campaign, "-o", mine, "--bootstrap", 0)
     assert code == 2 and "mine-2" in err and sums() == before, err
+
+
+def test_validate_names_only_cards_that_ship_and_only_their_own_sand():
+    from interphase.api import SHIPPED_CARDS, _shipped_card
+
+    assert all((ROOT / "soils" / card).is_file() for _, card in SHIPPED_CARDS)
+    lab = ROOT / "lab" / "x.csv"
+    assert _shipped_card(["Ottawa F-65"], lab) == ROOT / "soils" / "ottawa-f65.toml"
+    assert _shipped_card(["Ottawa 20/30 sand"], lab) is None          # the study's sand, not the card's

@@ -213,17 +213,21 @@ def calibrate(target: PathLike, *, quick: bool = False, output: PathLike | None 
     return fn(target, quick=quick, card_path=output, output=runs, executor=executor, jobs=jobs, rerun_failed=rerun_failed)
 
 
-#: shipped soil cards by a laboratory soil's name (soils/ beside the lab file's folder, or of the source tree)
-SHIPPED_CARDS = (("ottawa", "ottawa-20-30.toml"), ("glass", "glass-beads-0.7.toml"))
+#: shipped soil cards by a pattern of a laboratory soil's name (soils/ beside the lab file's folder, or
+#: of the source tree): the 3D card of a sand that has two; only the sand the card was calibrated on
+#: (Ottawa 20/30, the study's, is not Ottawa F-65)
+SHIPPED_CARDS = ((r"ottawa\s*f-?65", "ottawa-f65.toml"), (r"karlsruhe", "karlsruhe-fine-sand.toml"))
 
 
 def _shipped_card(soils, lab_path: Path):
     """The one shipped card whose name matches every soil of a lab file, or None."""
+    import re
+
     found = set()
     roots = (lab_path.resolve().parent / "soils", lab_path.resolve().parent.parent / "soils",
              Path(__file__).resolve().parents[2] / "soils")
     for soil in soils:
-        name = next((card for key, card in SHIPPED_CARDS if key in str(soil).lower()), None)
+        name = next((card for key, card in SHIPPED_CARDS if re.search(key, str(soil).lower())), None)
         found.add(next((r / name for r in roots if name and (r / name).is_file()), None))
     return found.pop() if len(found) == 1 else None
 
