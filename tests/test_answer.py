@@ -198,3 +198,17 @@ def test_validate_names_only_cards_that_ship_and_only_their_own_sand():
     lab = ROOT / "lab" / "x.csv"
     assert _shipped_card(["Ottawa F-65"], lab) == ROOT / "soils" / "ottawa-f65.toml"
     assert _shipped_card(["Ottawa 20/30 sand"], lab) is None          # the study's sand, not the card's
+
+
+def test_the_report_summary_reads_degrees_and_short_labels():
+    import pandas as pd
+
+    from interphase.report.build import short_label, summary_markdown
+
+    assert short_label("interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.2-user-prep0.387") == \
+        "sawtooth rt1 sr0 sw2 prep0.387, μs 0.2"
+    ens = pd.DataFrame([{"group": "g", "case": "interface-periodic-flat-mu0.2-poly", "seeds": 4, "tan_delta": 0.2,
+                         "tan_delta_lo": 0.19, "tan_delta_hi": 0.21, "tan_phi": 0.7, "tan_phi_lo": 0.68,
+                         "tan_phi_hi": 0.72, "E": 0.286, "E_lo": 0.27, "E_hi": 0.30}])
+    md = summary_markdown(ens, "prov")
+    assert "| g | flat, μs 0.2 | 4 | 11.3 (10.8–11.9) | 35.0 (34.2–35.8) | 0.29 (0.27–0.30) |" in md, md

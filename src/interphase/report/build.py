@@ -404,6 +404,30 @@ def _tables(m: ReportModel) -> list:
     return tables
 
 
+def short_label(case: str) -> str:
+    """A physical case's label without what every case of a campaign shares (the test, the device,
+    the gradation's word, the default preparation): 'sawtooth rt1 sw2 sr0, μs 0.2'."""
+    parts = [p for p in str(case).split("-") if p not in ("interface", "box", "periodic", "periodic3d", "walled",
+                                                            "user", "poly", "mono")]
+    mu = next((p for p in parts if p.startswith("mu")), None)
+    rest = [p for p in parts if p != mu]
+    return " ".join(rest) + (f", μs {mu[2:]}" if mu else "")
+
+
+def summary_markdown(ensembles: pd.DataFrame, provenance: str) -> str:
+    """summary.md: one line per physical case, δ and φ in degrees with their 95 % intervals and E."""
+    deg = lambda t: math.degrees(math.atan(t)) if pd.notna(t) else math.nan
+    iv = lambda a, b: "" if not (pd.notna(a) and pd.notna(b)) else f" ({a:.1f}–{b:.1f})"
+    rows = ["| group | case | seeds | δ [°] | φ of its soil test [°] | E |", "|---|---|---|---|---|---|"]
+    for r in ensembles.itertuples():
+        e = "" if pd.isna(r.E) else f"{r.E:.2f}" + ("" if pd.isna(r.E_lo) else f" ({r.E_lo:.2f}–{r.E_hi:.2f})")
+        rows.append(f"| {r.group} | {short_label(r.case)} | {r.seeds} | {deg(r.tan_delta):.1f}"
+                    f"{iv(deg(r.tan_delta_lo), deg(r.tan_delta_hi))} | {deg(r.tan_phi):.1f}"
+                    f"{iv(deg(r.tan_phi_lo), deg(r.tan_phi_hi))} | {e} |")
+    return ("# Summary: δ, φ and E per physical case (seed ensembles, 95 % intervals)\n\n" + "\n".join(rows)
+            + f"\n\n_{provenance}_\n")
+
+
 def write(m: ReportModel, out: str | Path, *, store=None, title: str | None = None) -> ReportResult:
     """Write a ReportModel to `out`: correlations.json, criterion.json, tables/ (with the summaries
     and curves tables of campaign.results), figures/ and index.html."""
@@ -423,6 +447,9 @@ def write(m: ReportModel, out: str | Path, *, store=None, title: str | None = No
             res.files.append(curves)
     if m.chain.theta_r or m.chain.ratio is not None or m.chain.efficiency is not None:
         res.files.append(write_criterion(m.chain, m.points, out / "criterion.json", m.provenance))
+    if m.ensembles is not None and len(m.ensembles):
+        (out / "summary.md").write_text(summary_markdown(m.ensembles, m.provenance))
+        res.files.append(out / "summary.md")
     table_entries = []
     for i, t in enumerate(m.tables):
         paths = T.write_table(t, tdir, m.provenance)
