@@ -333,7 +333,7 @@ def test_element_triaxial_json_at_a_relative_density(density_card, tmp_path):
            "--report", str(tmp_path / "report"), "--json"]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-2000:]
-    r = json.loads(res.stdout)
+    (r,) = json.loads(res.stdout)                     # a list, one entry per stress
     # the report of a run without records: the model's curves alone
     assert (tmp_path / "report" / "curves.png").stat().st_size > 0
     assert not (tmp_path / "report" / "verification.csv").exists()

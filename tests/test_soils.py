@@ -192,7 +192,7 @@ def test_element_test_runs_and_dense_preparation_is_denser(tmp_path, capsys, mon
     # seeds of one scatter by 0.03, so one loose seed decides the 0.02 below
     for name, path, seeds in (("dense", card, "2"), ("loose", loose, "1")):
         assert main(["element", str(path), "--normal-stress", "100e3", "--seeds", seeds, "--json"]) == 0
-        out[name] = json.loads(capsys.readouterr().out)
+        (out[name],) = json.loads(capsys.readouterr().out)      # a list, one entry per stress
     d = out["dense"]
     for k in ("phi_peak_deg", "phi_cs_deg", "psi_max_deg", "solid_fraction"):
         assert k in d and f"{k}_lo" in d and f"{k}_hi" in d and d["n_seeds"] == 2
@@ -203,7 +203,7 @@ def test_element_test_runs_and_dense_preparation_is_denser(tmp_path, capsys, mon
     # again: nothing reruns, the same numbers
     assert main(["element", str(card), "--normal-stress", "100e3", "--seeds", "2", "--json"]) == 0
     captured = capsys.readouterr()
-    assert json.loads(captured.out) == d and "0 to run" in captured.err
+    assert json.loads(captured.out) == [d] and "0 to run" in captured.err
     import interphase
 
     (api,) = interphase.element(card, 100e3, seeds=2)          # the Python API: the same runs, the same numbers

@@ -145,7 +145,7 @@ def _cmd_element(args, print_json) -> int:
         print("(a failed run is kept; `campaign element … --rerun-failed` runs it again)", file=sys.stderr)
     if args.json:
         rows = [r.to_dict() | {"runs": str(runs), "card_quick": card.quick, "failed": failed} for r in results]
-        print_json(rows[0] if len(rows) == 1 else rows)
+        print_json(rows)          # one shape: a list, one entry per stress
         return 0 if all(r.n_seeds for r in results) else 1
     for r in results:
         _print_element(card, r)
@@ -199,7 +199,7 @@ def _cmd_cell(args, print_json) -> int:
             print(f"report: {p}", file=stream)
     if args.json:
         rows = [r.to_dict() for r in results]
-        print_json(rows[0] if len(rows) == 1 else rows)
+        print_json(rows)          # one shape: a list, one entry per stress
         return 0 if all(r.n_seeds for r in results) else 1
     for r in results:
         def iv(name, fmt=".1f"):
