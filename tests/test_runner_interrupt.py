@@ -89,3 +89,17 @@ def test_an_engine_dead_before_it_left_the_group_is_reaped_and_the_interruption_
             os.kill(os.getpid(), signal.SIGINT)
 
     _run_sleep(tmp_path, monkeypatch, DiedInTheGroup)
+
+
+def test_the_signal_tests_hold_in_a_suite_started_with_sigint_ignored():
+    """The two tests above, run by a pytest that inherited SIGINT ignored (as `make test &` in a
+    script starts it): they pass there too, so their verdict does not depend on how the suite was
+    launched."""
+    import sys
+
+    names = ["test_a_signal_landing_inside_popen_still_kills_the_engine",
+             "test_an_engine_dead_before_it_left_the_group_is_reaped_and_the_interruption_raised"]
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                          *(f"{__file__}::{n}" for n in names)], capture_output=True, text=True, timeout=120,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    assert res.returncode == 0 and "2 passed" in res.stdout, res.stdout[-2000:] + res.stderr[-1000:]
