@@ -34,8 +34,9 @@ import pandas as pd
 from interphase.card_state import LEVEL, ErrorScale, card_dimension, card_misfit, soil_state
 from interphase.errors import InputError
 
-#: tan φ above this is an angle given in degrees, not a tangent (tan 50° = 1.19; no sand is steeper)
-MAX_TAN_PHI = 1.2
+#: tan φ above this is an angle given in degrees, not a tangent (tan 55° = 1.43: steeper than a dense
+#: gravel at low stress; the next integer a user could mean in degrees, 1°, is no soil either)
+MAX_TAN_PHI = 1.43
 
 
 def held_out_units(held_out: dict) -> list[str]:

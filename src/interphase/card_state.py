@@ -193,10 +193,11 @@ def soil_state(card, model, normal_stress, relative_density) -> dict:
                 "domain": f"{REFERENCE_STRESS / 1e3:g} kPa, preparation {fitted_prep:g}"}
     tp, lo, hi = table.at(stress, prep)
     s_lo, s_hi = table.stresses
-    dom = f"{s_lo / 1e3:g}–{s_hi / 1e3:g} kPa, preparation {min(table.preparations):g}–{max(table.preparations):g}"
+    span = lambda a, b, f: f"{a:{f}}" if f"{a:{f}}" == f"{b:{f}}" else f"{a:{f}}–{b:{f}}"
+    dom = f"{span(s_lo / 1e3, s_hi / 1e3, 'g')} kPa, preparation {span(min(table.preparations), max(table.preparations), 'g')}"
     if dmap is not None:
         drs = [dmap.relative_density(p, s) for p in table.preparations for s in (s_lo, s_hi)]
-        dom += f" (Dr {min(drs):.2f}–{max(drs):.2f} by the card's cell map)"
+        dom += f" (Dr {span(min(drs), max(drs), '.2f')} by the card's cell map)"
     return {"tan_phi": tp, "half": (hi - lo) / 2, "stress": stress, "preparation": prep, "dr": dr,
             "source": f"the card's soil test at {stress / 1e3:g} kPa ({table.path.name})", "domain": dom}
 
