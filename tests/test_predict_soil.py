@@ -169,8 +169,8 @@ def test_the_api_answers_as_the_command(tmp_path, capsys):
         assert api[key] == cli[key], key
     with pytest.raises(ip.InputError, match="not both"):
         ip.predict(saw, friction=0.2, soil=card, fit=str(FIT))
-    with pytest.raises(ip.InputError, match="d50_mm"):
-        ip.predict_dem(saw, 0.2, card, d50_mm=0.7, runs=tmp_path / "runs")
+    with pytest.raises(ip.InputError, match="d50"):
+        ip.predict_dem(saw, 0.2, card, d50=0.7e-3, runs=tmp_path / "runs")
     with pytest.raises(ip.InputError, match="one line"):
         ip.predict_dem(ROOT / "campaigns" / "profiles" / "frt-1.frt", 0.2, card, runs=tmp_path / "runs")
     with pytest.raises(ip.InputError, match="seeds"):

@@ -9,8 +9,8 @@ The Python API (interphase.api; the `campaign` command does the same):
     ip.status(c)                                    # DataFrame: one row per planned case
     ip.summaries(c)                                 # DataFrame: one row per finished run
     ip.ensembles(c)                                 # DataFrame: one row per physical case (seeds pooled)
-    ip.predict("profile.csv", d50_mm=0.7, friction=0.2)   # θa → θr → E → tan δ
-    ip.predict("profile.csv", friction=0.2, soil="soils/NAME.toml")   # on the card's own fit
+    ip.predict("profile.csv", soil="soils/NAME.toml", friction=0.2, normal_stress=200e3)   # the answer (Answer)
+    ip.predict("profile.csv", fit="study", d50=0.7e-3, friction=0.2)   # on the study's simulated discs
     ip.predict_dem("profile.csv", 0.2, "soils/NAME.toml")  # the DEM on the profile instead (runs)
     ip.element("soils/NAME.toml", 100e3, seeds=3)   # the soil's φ_peak, φ_cs, ψ_max (docs/soils.md)
     ip.calibrate("TARGET.toml")                     # grain parameters from a laboratory soil → a card

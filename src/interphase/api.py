@@ -136,7 +136,7 @@ def predict(profile: PathLike, *, friction: float | None = None, soil: PathLike 
 
 def predict_dem(profile: PathLike, friction: float, soil: PathLike, *, seeds: int = 3,
                 normal_stress: float = 100e3, runs: PathLike | None = None, jobs: int | None = None,
-                units: str | None = None, d50_mm: float | None = None, stream=None) -> dict:
+                units: str | None = None, d50: float | None = None, stream=None) -> dict:
     """The DEM instead of the criterion (as `campaign predict … --soil CARD --simulate --json`): the
     profile as measured sheared with the card's grains at `normal_stress` [Pa] and particle–surface
     `friction`, packing seeds 1…`seeds`, in the cell the card's criterion stands on
@@ -154,7 +154,7 @@ def predict_dem(profile: PathLike, friction: float, soil: PathLike, *, seeds: in
 
     check_dem_request(friction, seeds, normal_stress)
     card = load_card(soil)
-    card_d50_mm(card, d50_mm, "the DEM uses the card's grains", where="d50_mm")
+    card_d50_mm(card, None if d50 is None else d50 * 1e3, "the DEM uses the card's grains", where="d50")
     if read_scan(str(profile), units).areal:
         raise InputError("an areal scan: the DEM shears one line of it", where=str(profile),
                          fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
