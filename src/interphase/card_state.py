@@ -15,8 +15,6 @@ import pandas as pd
 from interphase.errors import InputError
 
 REFERENCE_STRESS = 100e3        # [Pa] the stress of the density map's ln term and of a card without a table
-
-
 LEVEL = 0.95                    # every interval here is a 95 % one
 
 
