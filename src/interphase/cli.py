@@ -704,12 +704,14 @@ def _cmd_predict_dem(args) -> int:
     if args.soil is None:
         raise InputError("--simulate runs the DEM with a soil card's grains", where="--simulate",
                          fix="add --soil CARD (soils/NAME.toml)")
+    from interphase.answer import friction_from
+
     if args.normal_stress is None:
         args.normal_stress = 100e3
-    for flag, value in (("--smooth-delta", args.smooth_delta), ("--relative-density", args.relative_density)):
-        if value is not None:
-            raise InputError(f"{flag} is the criterion's answer; --simulate runs the card at its own preparation",
-                             where=flag, fix=f"drop {flag}, or drop --simulate")
+    args.friction = friction_from(args.friction, args.smooth_delta)
+    if args.relative_density is not None:
+        raise InputError("--simulate runs the card at its own preparation", where="--relative-density",
+                         fix="drop --relative-density, or drop --simulate (the criterion reads the card's table)")
     check_dem_request(args.friction, args.seeds, args.normal_stress, ("--friction", "--seeds", "--normal-stress"))
     for flag, value in (("--fit", args.fit), ("--tan-phi", args.tan_phi), ("--filter", args.filter)):
         if value is not None:
