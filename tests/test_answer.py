@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import interphase as ip
-from interphase.answer import coverage, residual
+from interphase.answer import interval_coverage, residual
 from interphase.cli import main
 from interphase.errors import InputError
 
@@ -104,7 +104,7 @@ def test_coverage_is_nested_by_unit():
     cases = [{"group": g, "theta_a_deg_92": 10.0, "E_predicted": 0.5, "error_deg": e}
              for g, errs in (("a", (0.5, -0.4, 0.3)), ("b", (-0.5, 0.2, 0.4)), ("c", (9.0, 8.0, -7.0)))
              for e in errs]
-    c = coverage({"fold": "group held out", "n": 9, "cases": cases})
+    c = interval_coverage({"fold": "group held out", "n": 9, "cases": cases})
     assert c["units"] == 3 and c["all"]["n"] == 9
     assert c["all"]["covered"] == pytest.approx(6 / 9)       # a and b covered by scales that include c; c not
 
@@ -179,7 +179,7 @@ def test_a_3d_card_in_the_quasi_2d_device_is_refused(tmp_path):
 def test_report_onto_an_existing_folder_leaves_it_byte_identical(quick_campaign, tmp_path, capsys):
     import hashlib
 
-    from conftest import need_binary
+    from tests.conftest import need_binary
 
     need_binary("liggghts")
     mine = tmp_path / "mine"

@@ -7,15 +7,12 @@ import re
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from campaign_files import TINY_CASE, write_toml  # noqa: E402
-from conftest import need_binary  # noqa: E402
-
-from interphase.engines.progress import Stage, liggghts_stage  # noqa: E402
+from interphase.engines.progress import Stage, liggghts_stage
+from tests.campaign_files import TINY_CASE, write_toml
+from tests.conftest import need_binary
 
 pytestmark = pytest.mark.liggghts
 

@@ -54,7 +54,8 @@ def _unit(case: dict, fold: str) -> str:
 PLATEAU_E = 0.95
 
 
-def _branch(e) -> str:
+def branch_of(e) -> str:
+    """"plateau" for E predicted ≥ PLATEAU_E, else "rising" (None: rising)."""
     return "plateau" if e is not None and e >= PLATEAU_E else "rising"
 
 
@@ -65,12 +66,12 @@ def residual(held_out: dict | None, *, without: str | None = None, branch: str |
     if not held_out:
         return ErrorScale(0, math.nan, math.nan, "no held-out errors in the fit")
     cases = [c for c in held_out["cases"] if (without is None or _unit(c, held_out["fold"]) != without)
-             and (branch is None or _branch(c.get("E_predicted")) == branch)]
+             and (branch is None or branch_of(c.get("E_predicted")) == branch)]
     return ErrorScale.of([c["error_deg"] for c in cases],
                          f"{held_out['fold']}, {len(cases)} cases" + (f" on the {branch} branch" if branch else ""))
 
 
-def coverage(held_out: dict, by_branch: bool = True) -> dict:
+def interval_coverage(held_out: dict, by_branch: bool = True) -> dict:
     """How often the residual part of the model's interval covers a case it did not see, nested: each
     unit's cases against the half-width from every other unit's errors (of the case's branch, with
     `by_branch`). Returns the share inside and the mean half-width [°], on all cases, the rising
@@ -79,7 +80,7 @@ def coverage(held_out: dict, by_branch: bool = True) -> dict:
     units = held_out_units(held_out)
     rows = []
     for case, unit in zip(held_out["cases"], units):
-        b = _branch(case.get("E_predicted"))
+        b = branch_of(case.get("E_predicted"))
         h = residual(held_out, without=unit, branch=b if by_branch else None).half_width
         rows.append({"inside": abs(case["error_deg"]) <= h, "half_width": h, "branch": b})
     df = pd.DataFrame(rows)
@@ -195,10 +196,6 @@ def friction_from(friction, smooth_delta_deg) -> float:
     return float(friction)
 
 
-#: what `--fit` names: the reproduction's fit on the study's simulated discs, or the readings of its figures
-FIT_NAMES = {"study": "the reproduction's fit on the study's simulated discs (930 runs, tan φ 0.374; "
-                      "docs/reproduction.md)",
-             "study-figures": "approximate readings of the study's published figures, not fits"}
 #: a profile sampled coarser than this share of D50 has valleys a grain feels between its samples
 MAX_STEP_D50 = 0.5
 
@@ -304,7 +301,7 @@ def _answer(profile, mu, card, fit_path, model, state, res, d50, notes) -> Answe
     deg_at = lambda E: _deg(max(E * tp, bound)) if math.isfinite(E) else math.nan
     delta = _deg(td)
     fit_half = (deg_at(e_hi) - deg_at(e_lo)) / 2 if math.isfinite(e_lo) and math.isfinite(e_hi) else math.nan
-    scale = residual(model.held_out, branch=_branch(e))
+    scale = residual(model.held_out, branch=branch_of(e))
     slope = e / (1 + (e * tp) ** 2) * (1 + tp * tp)        # ∂δ/∂φ of δ = atan(E tan φ)
     tan_half = math.degrees(slope * state["half"] / (1 + tp * tp)) if math.isfinite(state["half"]) else math.nan
     misfit = card_misfit(card) if card is not None else None
@@ -327,9 +324,9 @@ def _answer(profile, mu, card, fit_path, model, state, res, d50, notes) -> Answe
                  "(whether E moves with them: studies/stress_density/README.md)" if card is not None
                  else f"tan φ from {state['source']}")
     notes += p.notes
-    from interphase.analysis.criterion import coverage
+    from interphase.analysis.criterion import coverage as fit_coverage
 
-    dom = f"μ and θa as the fit covers ({coverage(model)}); {state['domain']}"
+    dom = f"μ and θa as the fit covers ({fit_coverage(model)}); {state['domain']}"
     clip = lambda v: max(v, 0.0) if math.isfinite(v) else v
     return Answer(profile=str(profile), friction=mu, delta_deg=delta,
                   model_delta_deg_lo=clip(delta - h_model), model_delta_deg_hi=delta + h_model,

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from interphase.answer import LEVEL, _branch, coverage, held_out_units
+from interphase.answer import LEVEL, branch_of, held_out_units, interval_coverage
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -39,7 +39,7 @@ def conformal(held_out: dict) -> dict:
     for c, u in zip(cases, units):
         other = np.sort([abs(d["error_deg"]) for d, v in zip(cases, units) if v != u])
         q = other[min(math.ceil((other.size + 1) * LEVEL), other.size) - 1]
-        rows.append({"inside": abs(c["error_deg"]) <= q, "half_width": q, "branch": _branch(c["E_predicted"])})
+        rows.append({"inside": abs(c["error_deg"]) <= q, "half_width": q, "branch": branch_of(c["E_predicted"])})
     df = pd.DataFrame(rows)
     return {name: {"n": len(p), "covered": p["inside"].mean(), "mean_half_width_deg": p["half_width"].mean()}
             for name, p in (("all", df), ("rising", df[df.branch == "rising"]), ("plateau", df[df.branch == "plateau"]))}
@@ -49,8 +49,8 @@ def table() -> pd.DataFrame:
     rows = []
     for name, path in FITS.items():
         h = json.loads(path.read_text())["held_out"]
-        rules = {"t on rms, per branch (the answer's)": coverage(h, by_branch=True),
-                 "t on rms, pooled": coverage(h, by_branch=False), "conformal, pooled": conformal(h)}
+        rules = {"t on rms, per branch (the answer's)": interval_coverage(h, by_branch=True),
+                 "t on rms, pooled": interval_coverage(h, by_branch=False), "conformal, pooled": conformal(h)}
         for rule, c in rules.items():
             for part in ("all", "rising", "plateau"):
                 rows.append({"fit": name, "fold": h["fold"], "rule": rule, "cases": part, "n": c[part]["n"],

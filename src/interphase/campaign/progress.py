@@ -16,11 +16,6 @@ import time
 TICK = 1.0                  # [s] how often a running case's stage is read (plain lines; a few tail bytes)
 
 
-def _stage_text(stage) -> str:
-    name, share = stage
-    return name if share is None else f"{name} {100 * share:.0f} %"
-
-
 def _fmt_s(seconds: float | None) -> str:
     if seconds is None or seconds != seconds:
         return "—"
@@ -39,7 +34,7 @@ class Progress:
     def __init__(self, items, slots: int, stream=None, live: bool | None = None, title: str = "",
                  stage_of=None):
         self.stream = stream or sys.stdout
-        self.stage_of = stage_of            # case id → its running engine's stage in words, or None
+        self.stage_of = stage_of            # case id → its running engine's Stage (engines.progress), or None
         self._said: dict[str, tuple] = {}
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -107,13 +102,12 @@ class Progress:
                     continue
                 if stage is None:
                     continue
-                name, share = stage
-                key = (name, None if share is None else int(10 * share))
+                key = (stage.name, None if stage.share is None else int(10 * stage.share))
                 if self._said.get(cid) != key:
                     self._said[cid] = key
                     p = self.items.get(cid)
                     el = time.monotonic() - self.t0.get(cid, time.monotonic())
-                    self._line(f"  at     {cid}  {p.label if p else ''}  {_stage_text(stage)}  ({_fmt_s(el)})")
+                    self._line(f"  at     {cid}  {p.label if p else ''}  {stage.text()}  ({_fmt_s(el)})")
 
     def __exit__(self, *exc):
         self._stop.set()
@@ -183,7 +177,7 @@ class Progress:
             el = (time.monotonic() - self.t0[cid]) if s == "running" and cid in self.t0 else self.elapsed.get(cid)
             stage = self._stage(cid) if s == "running" else None
             t.add_row(cid, self.items[cid].label, f"[{self.STYLE.get(s, '')}]{s}[/]", _fmt_s(el),
-                      _stage_text(stage) if stage else "", self.cause.get(cid, ""))
+                      stage.text() if stage else "", self.cause.get(cid, ""))
         if len(self.items) > len(shown):
             t.caption = f"… {len(self.items) - len(shown)} more"
         return t

@@ -543,16 +543,10 @@ def _progress(campaign: Campaign, todo: list, store, slots: int, stream, live) -
     """The run's progress display, each running case's engine stage read from its folder; the
     time estimate printed before the first case starts."""
     print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), slots), file=stream, flush=True)
-    return Progress(todo, slots, stream=stream, live=live, title=campaign.name,
-                    stage_of=lambda cid: _stage_of(store.case_folder(cid)))
-
-
-def _stage_of(folder):
-    """(stage, share done) of the engine running in a case folder (engines.progress), or None."""
     from interphase.engines.progress import liggghts_stage
 
-    st_ = liggghts_stage(folder)
-    return None if st_ is None else (st_.name, st_.share)
+    return Progress(todo, slots, stream=stream, live=live, title=campaign.name,
+                    stage_of=lambda cid: liggghts_stage(store.case_folder(cid)))
 
 
 def _time_estimate(seconds: float, slots: int, measured=(0, 0.0, 0.0)) -> str:
