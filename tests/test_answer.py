@@ -154,6 +154,31 @@ def test_an_instrument_line_sampled_coarser_than_the_grain_is_refused(tmp_path, 
     assert code == 0 and "1.5 mm long, relief 0.0166 mm" in out, out
 
 
+def test_a_scan_whose_theta_a_rests_on_a_small_share_of_its_lines_is_refused(tmp_path, capsys):
+    """The shipped FRT scan (31 % of its points missing) answers and says the share of its line length
+    under the trace (64 % at D50 0.7 mm); the same scan with its first 300 of 500 rows blanked as well
+    (written as NetCDF, read by SurfaceTopography like any instrument file) falls below half, and is refused
+    naming the share and the fix."""
+    import numpy as np
+    from SurfaceTopography import Topography
+
+    from interphase.surface.readers import read_scan
+
+    frt = ROOT / "campaigns" / "profiles" / "frt-1.frt"
+    args = ("--fit", "study", "--d50", 0.7, "--friction", 0.2, "--json")
+    code, out, _ = _run(capsys, "predict", frt, *args)
+    share = json.loads(out)["trace_share"]
+    assert code == 0 and 0.5 < share < 0.8, out
+    scan = read_scan(frt)
+    h = np.array(scan.heights)
+    h[:300] = np.nan
+    holes = tmp_path / "holes.nc"
+    Topography(np.ma.masked_invalid(h), physical_sizes=(float(np.ptp(scan.x)), float(np.ptp(scan.y))),
+               unit="m").to_netcdf(str(holes))
+    code, _, err = _run(capsys, "predict", holes, *args)
+    assert code == 2 and "% of the scan's line length" in err and "crop the scan" in err, err
+
+
 def test_theta_a_without_a_grain_size_says_so(capsys):
     code, _, err = _run(capsys, "theta-a", DEKTAK)
     assert code == 2 and "--d50" in err and "Traceback" not in err

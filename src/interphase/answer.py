@@ -130,6 +130,7 @@ class Answer:
     theta_a_deg_92: float = math.nan  # θa of both filters (NaN: non-dilative)
     theta_a_deg_90: float = math.nan
     mean_slope_deg: float = math.nan
+    trace_share: float = math.nan     # an areal scan's line length under the pooled trace (NaN: a line)
     notes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
@@ -275,7 +276,27 @@ def predict(profile, *, friction: float | None = None, smooth_delta_deg: float |
             raise
         raise InputError(exc.message, where=exc.where, fix=f"{exc.fix}, or add --simulate to run the DEM on this "
                          "profile with the card's grains") from exc
+    if scan.areal:
+        _check_trace_share(res.trace_share, profile, axis or "x")
+        notes.append(f"θa rests on {100 * res.trace_share:.0f} % of the scan's line length along {axis or 'x'}")
     return _answer(profile, mu, card, fit_path, model, state, res, d50, notes)
+
+
+#: below this share of a scan's line length under the centroid trace, θa speaks for a small part of the scan
+MIN_TRACE_SHARE = 0.5
+
+
+def _check_trace_share(share: float, profile, axis: str) -> None:
+    """Refuse an areal θa resting on less than MIN_TRACE_SHARE of the scan's lines: missing points, runs
+    shorter than MIN_RUN_D50 D50 (dropped) and the grain's half-width at each run's ends leave the rest unseen."""
+    from interphase.surface.areal import MIN_RUN_D50
+
+    if math.isfinite(share) and share < MIN_TRACE_SHARE:
+        raise InputError(f"θa would rest on {100 * share:.0f} % of the scan's line length along {axis} (at least "
+                         f"{100 * MIN_TRACE_SHARE:.0f} % needed): the rest is missing points, runs shorter than "
+                         f"{MIN_RUN_D50:g} D50, or run ends", where=str(profile),
+                         fix="crop the scan to its measured area or fill its missing points, or give --axis "
+                             f"{'y' if axis == 'x' else 'x'} if its lines hold more")
 
 
 def load_soil(soil):
@@ -341,7 +362,7 @@ def _answer(profile, mu, card, fit_path, model, state, res, d50, notes) -> Answe
                   theta_r_lo=p.theta_r_interval[0], theta_r_hi=p.theta_r_interval[1], theta_a_filter=p.filter,
                   flat_spaced=res.flat_spaced, flat_spacing_reason=res.flat_spacing_reason,
                   theta_a_deg_92=res.theta_a_deg_92, theta_a_deg_90=res.theta_a_deg_90,
-                  mean_slope_deg=res.mean_slope_deg, notes=notes)
+                  mean_slope_deg=res.mean_slope_deg, trace_share=res.trace_share, notes=notes)
 
 
 def _runs_of(model) -> str:

@@ -405,6 +405,7 @@ class ProfilePrediction:
     mean_slope_deg: float
     flat_spaced: bool
     flat_spacing_reason: str
+    trace_share: float = math.nan  # an areal scan's line length under the pooled trace (NaN for a line)
 
     def to_dict(self) -> dict:
         """JSON data of `campaign predict` (and `ip.predict`): the prediction, δ's interval [°] also
@@ -414,7 +415,7 @@ class ProfilePrediction:
             "delta_deg_lo": lo, "delta_deg_hi": hi,
             "flat_spaced": self.flat_spaced, "flat_spacing_reason": self.flat_spacing_reason,
             "theta_a_deg_92": self.theta_a_deg_92, "theta_a_deg_90": self.theta_a_deg_90,
-            "mean_slope_deg": self.mean_slope_deg}
+            "mean_slope_deg": self.mean_slope_deg, "trace_share": self.trace_share}
 
 
 def predict_profile(model: CriterionModel, profile, d50: float, friction: float,
@@ -449,7 +450,8 @@ def predict_scan(model: CriterionModel, scan, d50: float, friction: float, axis:
     flat = bool(votes) and float(np.mean(votes)) > 0.5
     why = f"{sum(votes)} of {len(votes)} lines along {axis} with regular flat spacing"
     p = predict(model, friction, t[92].theta_a_deg, t[90].theta_a_deg, flat, filt)
-    return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat, why)
+    return ProfilePrediction(p, t[92].theta_a_deg, t[90].theta_a_deg, t[92].mean_slope_deg, flat, why,
+                             t[92].trace_share)
 
 
 def predict_measured(model: CriterionModel, scan, d50: float, friction: float, axis: str | None = None,

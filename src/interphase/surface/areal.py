@@ -52,6 +52,7 @@ class ArealThetaA:
     n_dropped: int              # valid runs shorter than MIN_RUN_D50·D50, dropped
     n_runs_dilative: int        # runs with a θa of their own
     n_points: int               # trace points pooled
+    trace_share: float          # share of the scan's line length (lines × span) under the pooled trace
     step: float                 # resampling step dx [m]
     kept_fraction: float
     max_tilt_deg: float
@@ -80,6 +81,7 @@ class _Axis:
     rnc: float = math.nan
     slope_deg: float = math.nan
     n_points: int = 0
+    trace_share: float = math.nan
 
 
 def areal_step(data_step: float, total_length: float, d50: float) -> float:
@@ -199,7 +201,11 @@ def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, wh
     ws2 = -2 * dx * dc / weight
     srtc, nwinc = _window_rt(c, crun, tpos, nt, w)
     rnc = srtc / nwinc / d50 if nwinc else math.nan
-    return _Axis(n_lines, R, n_dropped, dx, dc / dx, wc2, ws2, weight, crun[1:][same], rn, rnc, slope, int(c.size))
+    # missing points, short runs and the grain's half-width at each run's ends all leave line unseen
+    span = n_lines * float(s[-1] - s[0])
+    share = float(np.sum(np.maximum(nt - 1, 0)) * dx / span) if span > 0 else math.nan
+    return _Axis(n_lines, R, n_dropped, dx, dc / dx, wc2, ws2, weight, crun[1:][same], rn, rnc, slope, int(c.size),
+                 share)
 
 
 def _kept(t: np.ndarray, filt: int) -> tuple[np.ndarray, np.ndarray]:
@@ -243,7 +249,7 @@ def _result(ax: _Axis, direction: str, filt: int, d50: float) -> ArealThetaA:
         theta_a_ccw_deg=math.degrees(ccw) if not math.isnan(ccw) else math.nan,
         spread_deg=spread, filter=filt, d50=d50, rn=ax.rn, rnc=ax.rnc, mean_slope_deg=ax.slope_deg,
         n_lines=ax.n_lines, n_runs=ax.n_runs, n_dropped=ax.n_dropped, n_runs_dilative=int(per_run.size),
-        n_points=ax.n_points, step=ax.step,
+        n_points=ax.n_points, trace_share=ax.trace_share, step=ax.step,
         kept_fraction=float(wk.sum() / w.sum()) if w.sum() > 0 else 0.0,
         max_tilt_deg=tilt, dilative=not math.isnan(ccw), reason=reason)
 
