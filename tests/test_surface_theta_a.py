@@ -198,3 +198,30 @@ def test_one_period_of_a_sawtooth_gives_the_whole_profiles_values(rt, sw, sr):
     for f in (92, 90):
         for key in ("theta_a_deg", "rn", "rnc", "mean_slope_deg"):
             assert getattr(one[f], key) == pytest.approx(getattr(whole[f], key), rel=1e-9, abs=1e-9)
+
+
+def test_an_asymmetric_tooth_with_equal_flanks_is_the_sawtooth():
+    from interphase.surface.profiles import asymmetric_sawtooth
+
+    for sr in (0.0, 1.5):
+        a = asymmetric_sawtooth(0.3, 1.0, 1.0, sr, d50=D50, periods=4)
+        s = sawtooth(0.3, 2.0, sr, d50=D50, periods=4)
+        np.testing.assert_allclose(a.x, s.x, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(a.z, s.z, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("rt,rise,fall", [(0.25, 0.5, 1.5), (0.1, 0.3, 1.7), (0.5, 1.0, 3.0)])
+def test_an_asymmetric_tooth_reads_its_loaded_flank(rt, rise, fall):
+    """θa follows the flank the grains climb: the steep-loaded tooth reads more than the symmetric one
+    of the same height and period, the gentle-loaded one less; and the tooth sheared the other way
+    (the profile mirrored) is the tooth with its flanks swapped."""
+    from interphase.surface.profiles import asymmetric_sawtooth
+
+    steep = asymmetric_sawtooth(rt, rise, fall, d50=D50, periods=5)
+    gentle = asymmetric_sawtooth(rt, fall, rise, d50=D50, periods=5)
+    sym = sawtooth(rt, rise + fall, 0.0, d50=D50, periods=5)
+    t = {k: theta_a(p, D50).theta_a_deg for k, p in (("steep", steep), ("gentle", gentle), ("sym", sym))}
+    assert t["steep"] > t["sym"] > t["gentle"] > 0
+    assert t["steep"] < math.degrees(math.atan(rt / rise))
+    mirrored = Profile(steep.x[-1] - steep.x[::-1], steep.z[::-1], periodic=True)
+    assert theta_a(mirrored, D50).theta_a_deg == pytest.approx(t["gentle"], abs=1e-9)

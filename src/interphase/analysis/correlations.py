@@ -434,7 +434,7 @@ def prepare_points(summaries: pd.DataFrame) -> pd.DataFrame:
         pts[c] = pd.to_numeric(_col(pts, c), errors="coerce")
     pts["efficiency"] = efficiency(pts["peak_stress_ratio"].to_numpy(), pts["tan_phi"].to_numpy()) if len(pts) else []
     kind = _col(pts, "profile_kind", "").astype(str)
-    pts["flat_spaced"] = (kind == "sawtooth") & (pts["sr"].fillna(0) > 0)
+    pts["flat_spaced"] = kind.isin(["sawtooth", "asymmetric"]) & (pts["sr"].fillna(0) > 0)
     pts["non_dilative"] = pts["theta_a_deg_92"].isna() & (kind != "") & (kind != "None")
     pts.loc[pts["non_dilative"], "theta_a_deg_92"] = 0.0
     pts.loc[pts["non_dilative"] & pts["theta_a_deg_90"].isna(), "theta_a_deg_90"] = 0.0

@@ -351,7 +351,8 @@ def profile_features(case) -> Stage:
     # the surface the engine sheared (Case.sheared_surface); a saw-tooth is periodic: the trace of n
     # periods is n copies of one period's, so one period gives the same θa, Rn, Rnc and slope at 1/n
     # of the cost
-    prof = from_spec(case.profile, case.d50, case.d50) if case.profile.kind == "sawtooth" else case.sheared_surface()
+    periodic = case.profile.kind in ("sawtooth", "asymmetric")
+    prof = from_spec(case.profile, case.d50, case.d50) if periodic else case.sheared_surface()
     t = theta_a_filters(prof, case.d50, (92, 90))
     t92, t90 = t[92], t[90]
     out.values.update(theta_a_deg_92=t92.theta_a_deg, theta_a_deg_90=t90.theta_a_deg, rn=t92.rn, rnc=t92.rnc,

@@ -201,11 +201,14 @@ def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, wh
     ws2 = -2 * dx * dc / weight
     srtc, nwinc = _window_rt(c, crun, tpos, nt, w)
     rnc = srtc / nwinc / d50 if nwinc else math.nan
-    # missing points, short runs and the grain's half-width at each run's ends all leave line unseen
-    span = n_lines * float(s[-1] - s[0])
-    share = float(np.sum(np.maximum(nt - 1, 0)) * dx / span) if span > 0 else math.nan
     return _Axis(n_lines, R, n_dropped, dx, dc / dx, wc2, ws2, weight, crun[1:][same], rn, rnc, slope, int(c.size),
-                 share)
+                 _trace_share(nt, dx, n_lines * float(s[-1] - s[0])))
+
+
+def _trace_share(trace_points: np.ndarray, dx: float, line_length: float) -> float:
+    """The share of the lines' total length [m] under the runs' traces: missing points, dropped runs
+    and the grain's half-width at each run's ends leave the rest unseen."""
+    return float(np.sum(np.maximum(trace_points - 1, 0)) * dx / line_length) if line_length > 0 else math.nan
 
 
 def _kept(t: np.ndarray, filt: int) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,8 @@ from interphase.errors import InputError
 from interphase.surface.base import Profile
 from interphase.surface.filters import gaussian_filter, prepare_measured
 from interphase.surface.lines import line_profile, parse_line, scan_profile
-from interphase.surface.profiles import close, flat, random_profile, sawtooth, selfaffine_profile, tile
+from interphase.surface.profiles import (asymmetric_sawtooth, close, flat, random_profile, sawtooth, selfaffine_profile,
+                                         tile)
 from interphase.surface.readers import read_scan
 from interphase.surface.spec import ProfileSpec
 
@@ -100,6 +101,8 @@ def from_spec(spec: ProfileSpec, d50: float, length: float, wall_width: float | 
         return flat(length)
     if spec.kind == "sawtooth":
         return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50, length=length)
+    if spec.kind == "asymmetric":
+        return asymmetric_sawtooth(*(spec.param(k) for k in ("rt", "rise", "fall", "sr")), d50=d50, length=length)
     if spec.kind == "random":
         return random_profile(spec.param("au"), spec.param("ar"), spec.param("rtmax"), d50=d50, length=length,
                               seed=int(spec.param("seed")))

@@ -17,7 +17,8 @@ import numpy as np
 from interphase.errors import InputError
 from interphase.surface.base import Profile
 
-__all__ = ["Profile", "close", "crop", "flat", "random_profile", "sawtooth", "selfaffine_profile", "tile"]
+__all__ = ["Profile", "asymmetric_sawtooth", "close", "crop", "flat", "random_profile", "sawtooth", "selfaffine_profile",
+           "tile"]
 
 
 def flat(length: float, name: str = "flat") -> Profile:
@@ -46,6 +47,29 @@ def sawtooth(rt: float, sw: float, sr: float = 0.0, *, d50: float, length: float
     x = np.concatenate([(one_x[:-1] + k).ravel(), [periods * lam]])
     z = np.concatenate([np.tile(one_z[:-1], periods), [0.0]])
     return Profile(x, z, periodic=True, name=name or f"sawtooth-rt{rt:g}-sw{sw:g}-sr{sr:g}")
+
+
+def asymmetric_sawtooth(rt: float, rise: float, fall: float, sr: float = 0.0, *, d50: float,
+                        length: float | None = None, periods: int | None = None, name: str | None = None) -> Profile:
+    """Triangles of height `rt` rising over `rise` and falling over `fall`, flat `sr` between them (D50
+    units): soil moving toward +x climbs the rising flank, at atan(rt/rise), and leaves over the falling
+    one, at atan(rt/fall); sheared the other way the two swap (rise ↔ fall). rise = fall = sw/2 is
+    `sawtooth`. Valleys at z = 0; a whole number of periods covering at least `length` m (or `periods`)."""
+    if rt <= 0 or rise <= 0 or fall <= 0 or sr < 0:
+        raise InputError(f"need rt, rise, fall > 0 and sr ≥ 0 (D50 units), got rt={rt}, rise={rise}, fall={fall}, "
+                         f"sr={sr}", where="asymmetric sawtooth")
+    lam = (rise + fall + sr) * d50
+    if periods is None:
+        if length is None:
+            raise InputError("give length or periods", where="asymmetric sawtooth")
+        periods = max(1, math.ceil(length / lam - 1e-9))
+    spaced = sr > 1e-9 * (rise + fall)
+    one_x = np.array([0.0, rise, rise + fall] + ([rise + fall + sr] if spaced else [])) * d50
+    one_z = np.array([0.0, rt, 0.0] + ([0.0] if spaced else [])) * d50
+    k = np.arange(periods)[:, None] * lam
+    x = np.concatenate([(one_x[:-1] + k).ravel(), [periods * lam]])
+    z = np.concatenate([np.tile(one_z[:-1], periods), [0.0]])
+    return Profile(x, z, periodic=True, name=name or f"asym-rt{rt:g}-up{rise:g}-down{fall:g}-sr{sr:g}")
 
 
 def random_profile(au: float, ar: float, rtmax: float, *, d50: float, length: float, seed: int,

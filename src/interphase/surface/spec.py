@@ -34,6 +34,7 @@ from interphase.surface.units import units_factor
 KIND_PARAMS = {
     "flat": (),
     "sawtooth": ("rt", "sw", "sr"),
+    "asymmetric": ("rt", "rise", "fall", "sr"),
     "random": ("au", "ar", "rtmax", "seed"),
     "selfaffine": ("hurst", "rms_slope", "long_cutoff", "short_cutoff", "length", "seed"),
     "file": (),
@@ -73,6 +74,9 @@ class ProfileSpec:
         if self.kind == "sawtooth":
             if names["rt"] <= 0 or names["sw"] <= 0 or names["sr"] < 0:
                 raise InputError("need rt > 0, sw > 0, sr ≥ 0 (D50 units)", where=self.where)
+        if self.kind == "asymmetric":
+            if names["rt"] <= 0 or names["rise"] <= 0 or names["fall"] <= 0 or names["sr"] < 0:
+                raise InputError("need rt, rise, fall > 0 and sr ≥ 0 (D50 units)", where=self.where)
         if self.kind == "random":
             if names["au"] <= 0 or names["ar"] <= 0 or names["rtmax"] <= 0:
                 raise InputError("need au > 0, ar > 0, rtmax > 0 (D50 units)", where=self.where)
