@@ -14,13 +14,12 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from campaign_files import TINY_CASE, write_toml  # noqa: E402
-from conftest import need_binary  # noqa: E402
+from tests.campaign_files import TINY_CASE, write_toml
+from tests.conftest import need_binary
 
-from interphase.campaign.runner import stale_engine_pids  # noqa: E402
-from interphase.campaign.store import CampaignStore, folder_status  # noqa: E402
-from interphase.cli import main  # noqa: E402
+from interphase.campaign.runner import stale_engine_pids
+from interphase.campaign.store import CampaignStore, folder_status
+from interphase.cli import main
 
 pytestmark = pytest.mark.liggghts
 

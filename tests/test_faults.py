@@ -25,14 +25,13 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from conftest import need_binary  # noqa: E402
-from campaign_files import write_toml  # noqa: E402
-from test_campaign_run import TABLES, _folders, _group_ends, _no_engine_left, _starts, _wait_for  # noqa: E402
+from tests.conftest import need_binary
+from tests.campaign_files import write_toml
+from tests.test_campaign_run import TABLES, _folders, _group_ends, _no_engine_left, _starts, _wait_for
 
-from interphase.campaign.run import campaign_status  # noqa: E402
-from interphase.campaign.runner import stale_engine_pids  # noqa: E402
-from interphase.campaign.store import folder_status  # noqa: E402
+from interphase.campaign.run import campaign_status
+from interphase.campaign.runner import stale_engine_pids
+from interphase.campaign.store import folder_status
 
 pytestmark = pytest.mark.liggghts
 

@@ -12,11 +12,10 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from campaign_files import TINY_CASE, write_toml  # noqa: E402
-from conftest import need_binary  # noqa: E402
+from tests.campaign_files import TINY_CASE, write_toml
+from tests.conftest import need_binary
 
-from interphase.cli import main  # noqa: E402
+from interphase.cli import main
 
 pytestmark = pytest.mark.liggghts
 

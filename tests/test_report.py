@@ -441,10 +441,7 @@ def test_error_bars_stay_inside_the_axes(tmp_path):
 
 
 def _need(name: str) -> str:
-    import sys
-
-    sys.path.insert(0, str(Path(__file__).parent))
-    from conftest import need_binary
+    from tests.conftest import need_binary
 
     return need_binary(name)
 

@@ -11,14 +11,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from conftest import need_binary  # noqa: E402
+from tests.conftest import need_binary
 
-from interphase.analysis.ensemble import physical_case  # noqa: E402
-from interphase.campaign.store import CampaignStore  # noqa: E402
-from interphase.cli import main  # noqa: E402
-from interphase.campaign.results import open_campaign, write_curves, write_summaries  # noqa: E402
-from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
+from interphase.analysis.ensemble import physical_case
+from interphase.campaign.store import CampaignStore
+from interphase.cli import main
+from interphase.campaign.results import open_campaign, write_curves, write_summaries
+from interphase.analysis.ensemble_table import ensemble_table
 
 pytestmark = pytest.mark.liggghts
 

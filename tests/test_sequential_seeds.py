@@ -12,14 +12,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).parent))
-from campaign_files import TINY_CASE, toml_text  # noqa: E402
-from conftest import need_binary  # noqa: E402
+from tests.campaign_files import TINY_CASE, toml_text
+from tests.conftest import need_binary
 
-from interphase.campaign.plan import plan  # noqa: E402
-from interphase.campaign.schema import SeedRule, load_campaign  # noqa: E402
-from interphase.campaign.sequential import cap_notes, interface_key, replay, wanted_ids  # noqa: E402
-from interphase.cli import main  # noqa: E402
+from interphase.campaign.plan import plan
+from interphase.campaign.schema import SeedRule, load_campaign
+from interphase.campaign.sequential import cap_notes, interface_key, replay, wanted_ids
+from interphase.cli import main
 
 #: two physical cases (μs 0.05 and 0.5) of the tiny periodic case, sheared at 0.02 m/s
 BASE_TABLES = dict(campaign={"name": "seq", "engines": ["liggghts"], "output": "out"},

@@ -12,12 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from conftest import need_binary  # noqa: E402
+from tests.conftest import need_binary
 
-from interphase.cli import main  # noqa: E402
-from interphase.errors import InputError  # noqa: E402
-from interphase.lab import profile_of, read_lab  # noqa: E402
+from interphase.cli import main
+from interphase.errors import InputError
+from interphase.lab import profile_of, read_lab
 
 ROOT = Path(__file__).resolve().parents[1]
 HEAD = ("soil,d50_mm,surface,asperity_height_mm,asperity_width_mm,root_spacing_mm,normal_stress_kpa,"
