@@ -322,3 +322,23 @@ def test_specimen_from_starts_the_other_engine_from_the_source_run(tmp_path, cap
     assert out.count("starts from liggghts:") == 2 and out.count("  run  ") == 4
     # the two liggghts runs are rendered, the two that start from them are not (their specimen is not made)
     assert len(list((tmp_path / "out" / ".dry-run").glob("*/in.deck"))) == 2
+
+
+def test_an_element_cell_is_estimated_by_its_own_steps():
+    """A cell case's estimate counts the cell's steps (consolidation, chunks, settle, axial compression at
+    the cell's time step) over its grains, not an interface deck's shear: a density map's token
+    compression (0.2 %) costs a fraction of the full triaxial (40 %), and twice the grains about twice."""
+    import tomllib
+
+    from interphase.campaign.plan import estimate_seconds
+    from interphase.case import case_from_dict
+
+    soil = tomllib.loads((CAMPAIGNS.parent / "soils" / "karlsruhe-fine-sand.toml").read_text())["soil"]
+    base = dict(test="triaxial", device="periodic3d", n_grains=1000, normal_stress=100e3, strain_rate=10.0,
+                axial_strain=0.4, **{k: soil[k] for k in ("d50", "density", "shear_modulus", "friction_pp",
+                                                          "rolling_friction", "gradation")})
+    full = estimate_seconds(case_from_dict(base, where="test"))
+    token = estimate_seconds(case_from_dict(base | {"axial_strain": 0.002}, where="test"))
+    double = estimate_seconds(case_from_dict(base | {"n_grains": 2000}, where="test"))
+    assert token < full / 3 and 1.7 < double / full < 2.3
+    assert 30 < token < 300          # 1000 grains at G 500 MPa: 66–182 s each measured, two processes a core

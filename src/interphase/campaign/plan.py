@@ -191,11 +191,29 @@ def estimate_seconds(case: Case, throughput: float = 1.5e6) -> float:
     """Rough engine run time [s]: particle-steps / throughput (docs/engines.md: 1.5–4e6 steps/s on one core),
     with the LIGGGHTS deck's own time step and consolidation time. Used for SLURM time limits; the
     engine's own timeout is separate."""
+    if case.cell:
+        return _cell_seconds(case, throughput)
     from interphase.engines.device import CONSOLIDATION_TIME
     from interphase.engines.liggghts import time_step
 
     steps = (CONSOLIDATION_TIME + case.shear_distance / case.shear_velocity) / time_step(case)
     return steps * estimate_grains(case) / throughput
+
+
+#: consolidation chunks an element cell typically needs past its first stretch (2–3 on the 3D Karlsruhe
+#: card's 1000-grain cells at 50–100 kPa, read off their LIGGGHTS logs)
+CELL_CHUNKS = 2
+
+
+def _cell_seconds(case: Case, throughput: float) -> float:
+    """An element cell's run time [s]: its own steps (engines.cell.cell_steps at the cell's time step:
+    the first consolidation, CELL_CHUNKS chunks, the settle, the axial compression) over its grains."""
+    from interphase.engines.cell import cell
+
+    c = cell(case)
+    s = c.steps
+    steps = s.n_consolidate + CELL_CHUNKS * s.n_chunk + c.n_settle + s.n_shear
+    return steps * c.packing.n / throughput
 
 
 #: SLURM time limits are rounded up to one of these (minutes), so that a campaign makes few arrays
