@@ -1,10 +1,10 @@
 """Which 3D interface cell buys E ± 0.1 for the fewest core-hours? The cell study's price list
-(issue 38 item 1: campaigns/real_sand/cell_3d.toml, docs/3d.md).
+(issue 38 item 1: studies/kfs_3d_cell/cell_3d.toml, docs/3d.md).
 
-    PYTHONPATH=src python bench/cell_3d_choice.py [campaigns/real_sand/cell_3d.toml]
+    PYTHONPATH=src python bench/cell_3d_choice.py [studies/kfs_3d_cell/cell_3d.toml]
 
 Reads the campaign's finished runs (or, without its runs folder, the committed tables in
-docs/reproduction/real_sand/3d/cell/: summaries.csv, curves.parquet). Per cell (depth × length in
+studies/kfs_3d_cell/results/: summaries.csv, curves.parquet). Per cell (depth × length in
 D50) and per physical case, from each run's leave-one-out peak (campaign.compare.seed_values, read
 within the cell): seeds, the seed mean and its sd of tan φ (soil test) or tan δ, the mean wall time
 per run (`elapsed`: one run on one core, two at a time on the 2-core VM). Then, per cell, the
@@ -32,7 +32,7 @@ from interphase.analysis.ensemble import ratio_interval  # noqa: E402
 from interphase.campaign.compare import seed_values  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-COMMITTED = ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "cell"
+COMMITTED = ROOT / "studies" / "kfs_3d_cell" / "results"
 CELL = ["box_depth_d50", "box_length_d50"]
 CASES = 18          # Group 1: 6 heights × 3 frictions
 
@@ -97,7 +97,7 @@ def _md(df: pd.DataFrame) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("campaign", nargs="?", default=str(ROOT / "campaigns" / "real_sand" / "cell_3d.toml"))
+    ap.add_argument("campaign", nargs="?", default=str(ROOT / "studies" / "kfs_3d_cell" / "cell_3d.toml"))
     args = ap.parse_args(argv)
     summ, store = open_runs(Path(args.campaign))
     try:

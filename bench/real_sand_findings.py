@@ -2,8 +2,8 @@
 
     PYTHONPATH=src python bench/real_sand_findings.py [--figure PNG]
 
-Reads docs/reproduction/real_sand/2d/ (campaigns/real_sand/group1_kfs_2d.toml, the quasi-2D card) and
-docs/reproduction/real_sand/3d/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
+Reads studies/kfs_group1_2d/results/ (studies/kfs_group1_2d/group1_kfs_2d.toml, the quasi-2D card) and
+studies/kfs_group1_3d/results/ (group1_kfs_3d.toml, the 3D card's grains in the 30 × 15 × 10
 D50 cell): summaries.csv and curves.parquet, read as the report reads runs (analysis.ensemble_table:
 each case's leave-one-out peak over its seeds, E over the paired soil test, 95 % intervals).
 Prints Markdown for docs/reproduction.md:
@@ -50,8 +50,8 @@ from interphase.campaign.compare import seed_values  # noqa: E402
 from interphase.campaign.results import CommittedCurves  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-CELLS = {"quasi-2D": ROOT / "docs" / "reproduction" / "real_sand" / "2d",
-         "3D": ROOT / "docs" / "reproduction" / "real_sand" / "3d"}
+CELLS = {"quasi-2D": ROOT / "studies" / "kfs_group1_2d" / "results",
+         "3D": ROOT / "studies" / "kfs_group1_3d" / "results"}
 SATURATED_RT = 1.0        # the teeth whose E item 3 of the issue reads as the plateau
 BIAXIAL_2D = ROOT / "docs" / "soils" / "karlsruhe-fine-sand-2d" / "verification_tmd17_6seeds.csv"
 
@@ -182,7 +182,7 @@ def _in_range(r, lo: float, hi: float) -> str:
 
 
 def predictions_3d(d3: dict, d2: dict | None) -> None:
-    """Each prediction written in campaigns/real_sand/group1_kfs_3d.toml's header before its runs,
+    """Each prediction written in studies/kfs_group1_3d/group1_kfs_3d.toml's header before its runs,
     against the committed 3D tables: what it said, what the runs read, met / not met / not yet. The
     E–θr break (prediction 3) is the report's fit: `bench/refit_reproduction.py --kfs3d`."""
     c = d3["cases"]

@@ -50,7 +50,7 @@ def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
 #: points per run in curves.parquet: 200 over a 6 mm shear is one per 0.03 mm, 12 per peak window
 #: (PEAK_WINDOW_D50 × D50 at D50 0.7 mm); the ensembles' tan δ, tan φ and E from them stay within 2 %
 #: of their interval's width of the full curves' (measured: tests/test_restore.py); on the Karlsruhe
-#: sand's quasi-2D Group 1 (24 cases, 4-8 seeds, docs/reproduction/real_sand/2d/) up to 0.003 in E and
+#: sand's quasi-2D Group 1 (24 cases, 4-8 seeds, studies/kfs_group1_2d/results/) up to 0.003 in E and
 #: 0.010 at an end of its interval (5 % of that interval's width)
 CURVE_POINTS = 200
 
