@@ -101,6 +101,60 @@ class CommittedCurves:
         return Path("/nonexistent-runs-folder") / str(case_id)
 
 
+def read_committed(folder: str | Path) -> tuple[pd.DataFrame, CommittedCurves]:
+    """(summaries, curves) of a committed runs folder: its summaries.csv (identities as text) and
+    curves.parquet, what every reader of committed runs starts from without a runs folder."""
+    folder = Path(folder)
+    summaries = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str})
+    return summaries, CommittedCurves(folder / "curves.parquet")
+
+
+#: a re-derived table matches its committed copy within these (the fourth-last digit of a float64,
+#: where the BLAS and the platform may move a bootstrap's or an interval's last bits)
+TABLE_RTOL, TABLE_ATOL = 1e-6, 1e-9
+
+
+def same_table(table: pd.DataFrame, path: str | Path) -> bool:
+    """Whether `table`, written as CSV, reads back as the committed CSV at `path`: the same columns
+    and rows, text equal, numbers within TABLE_RTOL/TABLE_ATOL."""
+    import io
+
+    path = Path(path)
+    if not path.exists():
+        return False
+    text = table.to_csv(index=False)
+    if text == path.read_text():
+        return True
+    new, old = pd.read_csv(io.StringIO(text)), pd.read_csv(path)
+    if list(new.columns) != list(old.columns) or new.shape != old.shape:
+        return False
+    for c in new.columns:
+        a, b = new[c], old[c]
+        if pd.api.types.is_numeric_dtype(a) and pd.api.types.is_numeric_dtype(b):
+            if not np.allclose(a.to_numpy(float), b.to_numpy(float), rtol=TABLE_RTOL, atol=TABLE_ATOL, equal_nan=True):
+                return False
+        elif not (a.astype(str).where(a.notna(), "") == b.astype(str).where(b.notna(), "")).all():
+            return False
+    return True
+
+
+def write_or_check(tables: dict, check: bool) -> list[Path]:
+    """A study's re-derived tables ({path: DataFrame}) against their committed CSVs: with `check`,
+    write nothing and return the paths whose table differs (`same_table`) or is missing; else write
+    each one that differs (a match is left as committed, so that a re-derivation does not churn the
+    last digits) and return those written."""
+    out = []
+    for path, table in tables.items():
+        path = Path(path)
+        if same_table(table, path):
+            continue
+        out.append(path)
+        if not check:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            table.to_csv(path, index=False)
+    return out
+
+
 def open_campaign(campaign_path: str | Path, output: str | Path | None = None, engines=None):
     """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
     runs' folder when not where the file says, as `campaign run --output` wrote them; `engines`: the
