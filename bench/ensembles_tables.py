@@ -4,9 +4,9 @@ folder, no engine): what `campaign report` writes as tables/ensembles.csv (analy
     PYTHONPATH=src python bench/ensembles_tables.py [--check]
 
 Tables: docs/reproduction/ensembles.csv (the study, 3 seeds), precision/ensembles.csv (Group 1 to
-E ± 0.1), precision/study/ensembles.csv (the sequential study), group1_sandlike/ensembles.csv, and
-the 3D cell and stiffness studies' (real_sand/3d/cell/, stiffness_*/; docs/3d.md). The real-sand
-Group 1 sets' and the other reports' tables are `bench/refit_reproduction.py`'s.
+E ± 0.1), precision/study/ensembles.csv (the sequential study) and group1_sandlike/ensembles.csv. The
+other reports' tables are `bench/refit_reproduction.py`'s; a study's (studies/NAME/) its own
+analysis script's.
 The check campaigns' tables (stronger_soil, comb_stiffness, narrow_valleys) and docs/convergence/
 have no committed curves: they keep the estimator they were written with, the seed-mean curve's
 maximum (docs/reproduction.md and docs/convergence.md say so where they are quoted).
@@ -27,9 +27,7 @@ from sequential_coverage import _Curves  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
 
 REPRO = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
-TABLES = {"": "%.5g", "precision/": None, "precision/study/": None, "group1_sandlike/": None,
-          **{f"real_sand/3d/{sub}/": None for sub in ("cell", "stiffness_card", "stiffness_soft",
-                                                     "stiffness_chosen_cell", "stiffness_chosen_cell_soft")}}
+TABLES = {"": "%.5g", "precision/": None, "precision/study/": None, "group1_sandlike/": None}
 
 
 def main(argv=None) -> None:

@@ -2,7 +2,7 @@
 
     PYTHONPATH=src python bench/mesh_step_check.py [--steps 0.026 0.1] [--seeds 1 2 3] [--out DIR]
 
-The quasi-2D Karlsruhe campaign's Dektak case at μs 0.05 (campaigns/real_sand/group1_kfs_2d.toml,
+The quasi-2D Karlsruhe campaign's Dektak case at μs 0.05 (studies/kfs_group1_2d/group1_kfs_2d.toml,
 group measured-kfs-2d), its line (77 nm steps, 0.46 µm of relief) resampled by hand to each step
 [D50] and written as a two-column file, so that the device meshes it as given; beside it the flat.
 Each case runs once per seed with LIGGGHTS (campaign.runner.run_case; a finished folder is read,
@@ -29,7 +29,7 @@ from interphase.surface.builder import _measured, file_spec
 from interphase.surface.spec import ProfileSpec
 
 ROOT = Path(__file__).resolve().parents[1]
-CAMPAIGN = ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"
+CAMPAIGN = ROOT / "studies" / "kfs_group1_2d" / "group1_kfs_2d.toml"
 
 
 def dektak_case(friction: float = 0.05):

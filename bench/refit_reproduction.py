@@ -6,7 +6,7 @@ the criterion's check against every case, and the findings tables.
         [--precision] [--out DIR] [--boot N] [--figures] [--commit]
 
 --study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/;
---kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, docs/reproduction/real_sand/2d/ and 3d/;
+--kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, studies/kfs_group1_2d/results/ and studies/kfs_group1_3d/results/;
 --precision: the study's sequential rerun to E ± 0.1, docs/reproduction/precision/study/
 (campaigns/precision/study_sequential.toml; bench/findings_moved.py reads it against --study).
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
@@ -35,10 +35,11 @@ from interphase.report.build import analyse, write
 
 ROOT = Path(__file__).resolve().parents[1]
 REPRO = ROOT / "docs" / "reproduction"
+STUDIES = ROOT / "studies"
 SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
-        "kfs2d": (REPRO / "real_sand" / "2d", ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"),
-        "kfs3d": (REPRO / "real_sand" / "3d", ROOT / "campaigns" / "real_sand" / "group1_kfs_3d.toml"),
+        "kfs2d": (STUDIES / "kfs_group1_2d" / "results", STUDIES / "kfs_group1_2d" / "group1_kfs_2d.toml"),
+        "kfs3d": (STUDIES / "kfs_group1_3d" / "results", STUDIES / "kfs_group1_3d" / "group1_kfs_3d.toml"),
         "precision": (REPRO / "precision" / "study", ROOT / "campaigns" / "precision" / "study_sequential.toml")}
 
 

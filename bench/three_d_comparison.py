@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from interphase.analysis.difference import difference, verdict
+from interphase.analysis.difference import difference, e_difference, shared_soil_e_difference
 from interphase.analysis.ensemble_table import ensemble_table
 from interphase.campaign.results import CommittedCurves as _Curves
 from interphase.campaign.compare import seed_values
@@ -60,44 +60,6 @@ def load(campaign: Path, save: Path | None):
                 rows.append(pd.DataFrame({"case_id": cid, "shear_disp": c[0], "stress_ratio": c[1]}))
         pd.concat(rows).to_parquet(save / "curves.parquet", index=False)
     return summ, store
-
-
-def _log_terms(a: np.ndarray, b: np.ndarray) -> list[tuple[float, int]]:
-    """(variance term, seeds) of ln(mean a / mean b) by the delta method, one per side."""
-    return [(v.var(ddof=1) / (v.size * v.mean() ** 2), v.size) for v in (a, b)]
-
-
-def e_difference(a1, b1, a2, b2, level: float = 0.95) -> tuple[float, float, float, str]:
-    """E2 − E1 with its `level` interval and verdict (E = mean a / mean b per device, the four seed
-    groups independent: two devices, two soils): each E's delta-method variance on the log, scaled
-    by E², added; Student t with Welch–Satterthwaite degrees of freedom, as the report's E interval
-    (docs/methods.md). The verdict is the 95 % interval's."""
-    if min(v.size for v in (a1, b1, a2, b2)) < 2:
-        return math.nan, math.nan, math.nan, "undecided"
-    e1, e2 = a1.mean() / b1.mean(), a2.mean() / b2.mean()
-    terms = [(e1 ** 2 * v, n) for v, n in _log_terms(a1, b1)] + [(e2 ** 2 * v, n) for v, n in _log_terms(a2, b2)]
-    var = sum(v for v, _ in terms)
-    df = var ** 2 / sum(v ** 2 / (n - 1) for v, n in terms if v > 0) if var > 0 else 1.0
-    d = e2 - e1
-    h95, h = (stats.t.ppf(0.5 + q / 2, df) * math.sqrt(var) for q in (0.95, level))
-    return d, d - h, d + h, verdict(d - h95, d + h95, TOL_E)
-
-
-def shared_soil_e_difference(a1, a2, b) -> tuple[float, float, float, str]:
-    """E2 − E1 of two interface ensembles over ONE soil ensemble b: (mean a2 − mean a1)/mean b.
-    The soil enters once, as a scale: var ≈ var_Welch(a2 − a1)/b̄² + d²·s_b²/(n_b·b̄²); Student t
-    with the Welch degrees of freedom of the interface terms (counting b in each E and adding the
-    two E's variances, as e_difference does for two soils, counts its scatter twice and ignores
-    that it moves both E together)."""
-    if min(v.size for v in (a1, a2, b)) < 2:
-        return math.nan, math.nan, math.nan, "undecided"
-    bm = b.mean()
-    d = (a2.mean() - a1.mean()) / bm
-    v1, v2 = a1.var(ddof=1) / a1.size, a2.var(ddof=1) / a2.size
-    var = (v1 + v2) / bm ** 2 + d ** 2 * b.var(ddof=1) / (b.size * bm ** 2)
-    df = (v1 + v2) ** 2 / (v1 ** 2 / (a1.size - 1) + v2 ** 2 / (a2.size - 1)) if v1 + v2 > 0 else 1.0
-    h = stats.t.ppf(0.975, df) * math.sqrt(var)
-    return d, d - h, d + h, verdict(d - h, d + h, TOL_E)
 
 
 def _fmt(v, lo, hi, nd=3) -> str:
@@ -134,8 +96,8 @@ def main(campaign: Path, save: Path | None) -> None:
             continue
         t2, t3 = table.loc[c2], table.loc[c3]
         d = difference(peaks(c2), peaks(c3), TOL_TAN)
-        de, lo, hi, v = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"])
-        _, lo90, hi90, _ = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"], 0.90)
+        de, lo, hi, v = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"], TOL_E)
+        _, lo90, hi90, _ = e_difference(peaks(c2), soil["periodic"], peaks(c3), soil["periodic3d"], TOL_E, level=0.90)
         s = study.loc[c2] if c2 in study.index else None
         big = _fmt(s["E"], s["E_lo"], s["E_hi"], 2) if s is not None else "—"
         print(f"| {rt:g} | {_fmt(t2.tan_delta, t2.tan_delta_lo, t2.tan_delta_hi)} | {_fmt(t3.tan_delta, t3.tan_delta_lo, t3.tan_delta_hi)} "
@@ -173,7 +135,7 @@ def main(campaign: Path, save: Path | None) -> None:
         th_a, pred = _predicted(row, tphi.get("periodic3d", (math.nan,))[0])
         if ce is not None and ce in table.index:
             te = table.loc[ce]
-            de, lo, hi, v = shared_soil_e_difference(peaks(ce), peaks(ca), soil["periodic3d"])
+            de, lo, hi, v = shared_soil_e_difference(peaks(ce), peaks(ca), soil["periodic3d"], TOL_E)
             ext, diff = _fmt(te.E, te.E_lo, te.E_hi, 2), f"{de:+.2f} ({lo:+.2f}, {hi:+.2f})"
         else:
             ext, diff, v = "(not finished)", "—", "—"

@@ -18,7 +18,7 @@ from interphase.errors import InputError
 ROOT = Path(__file__).resolve().parents[1]
 DEKTAK = ROOT / "campaigns" / "profiles" / "dektak-1.csv"
 CARD = ROOT / "soils" / "karlsruhe-fine-sand.toml"
-FIT3D = ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "criterion.json"
+FIT3D = ROOT / "studies" / "kfs_group1_3d" / "results" / "criterion.json"
 RECORD = ROOT / "lab" / "soils" / "karlsruhe-fine-sand" / "drained-triaxial" / "TMD11.dat"
 
 

@@ -68,14 +68,14 @@ def test_compare_shifted_ensemble_differs_on_its_metric_only():
 
 
 def test_surface_contacts_are_per_area_in_3d_so_a_deeper_cell_reads_the_same_density():
-    """The committed 3D cell study (docs/reproduction/real_sand/3d/cell/summaries.csv): a surface in a
+    """The committed 3D cell study (studies/kfs_3d_cell/results/summaries.csv): a surface in a
     cell 10 D50 deep carries about twice the contacts it carries in one 5 D50 deep; per D50² of
     surface (length × depth) the two agree within 10 % (the compare's tolerance), per D50 of length
     alone they would not. A quasi-2D row keeps its length."""
     from interphase.analysis.ensemble import physical_case
     from interphase.campaign.compare import surface_extent_d50
 
-    summ = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "cell" / "summaries.csv")
+    summ = pd.read_csv(ROOT / "studies" / "kfs_3d_cell" / "results" / "summaries.csv")
     iface = summ[summ["test"].eq("interface") & summ["box_length_d50"].eq(20.0)]
     extent = surface_extent_d50(iface, 0.00014)
     length = (iface["region_x1"] - iface["region_x0"]) / 0.00014

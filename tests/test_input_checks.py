@@ -82,13 +82,13 @@ def test_unstated_converged_settings_are_named(tmp_path):
 
 
 def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
-    """campaigns/real_sand/stiffness_3d_soft.toml copies the 3D card's grains (a card is not
+    """studies/kfs_3d_stiffness/g50_20x15x5.toml copies the 3D card's grains (a card is not
     overridden field by field): its cases are the card file's, case for case, but for G."""
     def cases(name):
-        camp = load_campaign(ROOT / "campaigns" / "real_sand" / name)
+        camp = load_campaign(ROOT / "studies" / "kfs_3d_stiffness" / name)
         return {(x.role, x.case.seed): x.case.canonical() for x in camp.cases}
 
-    card, soft = cases("stiffness_3d_card.toml"), cases("stiffness_3d_soft.toml")
+    card, soft = cases("g500_20x15x5.toml"), cases("g50_20x15x5.toml")
     assert card.keys() == soft.keys() and len(card) == 6
     for k in card:
         diff = {f for f in card[k] if card[k][f] != soft[k].get(f)} | (soft[k].keys() - card[k].keys())
@@ -97,7 +97,7 @@ def test_the_soft_stiffness_variant_is_the_card_at_another_g_only():
     # the cell study runs on the same softened grains
     grains = {f: v for f, v in next(iter(soft.values())).items() if f in SOIL_FIELDS}
     assert grains.keys() == set(SOIL_FIELDS)
-    cell = load_campaign(ROOT / "campaigns" / "real_sand" / "cell_3d.toml")
+    cell = load_campaign(ROOT / "studies" / "kfs_3d_cell" / "cell_3d.toml")
     for x in cell.cases:
         assert {f: v for f, v in x.case.canonical().items() if f in SOIL_FIELDS} == grains
 
@@ -106,7 +106,7 @@ def test_a_soil_cards_fields_count_as_stated():
     # the card's G fills every case: no note may say it takes the 29 GPa default
     import tomllib
 
-    camp = load_campaign(ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml")
+    camp = load_campaign(ROOT / "studies" / "kfs_group1_2d" / "group1_kfs_2d.toml")
     assert "shear_modulus" in camp.stated
     assert not [w for w in camp.warnings() if "convergence study" in w]
     card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand-2d.toml").read_text())["soil"]

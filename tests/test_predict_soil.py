@@ -75,7 +75,7 @@ def test_simulate_refuses_what_only_the_criterion_uses(tmp_path, capsys):
                                               ("karlsruhe-fine-sand.toml", "3d")])
 def test_each_kfs_card_ships_the_fit_of_its_own_group1(tmp_path, capsys, card_name, cell):
     """Each Karlsruhe card (quasi-2D and 3D) names the criterion fitted on its own Group 1
-    (docs/reproduction/real_sand/<cell>/criterion.json): predict --soil answers on a tooth inside the
+    (studies/kfs_group1_<cell>/results/criterion.json): predict --soil answers on a tooth inside the
     fitted θa range with δ and its interval, from θa–θr lines fitted per friction (nine or more
     surfaces a friction), and the fit's tan φ is the committed ensembles' soil test (one set of runs);
     the shipped Dektak line (θa 2.5° at this D50) is inside the range the flats give;
@@ -93,7 +93,7 @@ def test_each_kfs_card_ships_the_fit_of_its_own_group1(tmp_path, capsys, card_na
     fit = json.loads(Path(out["fit"]).read_text())
     assert fit["source"].startswith(f"campaign group1-kfs-{cell}")
     assert {"0.05", "0.2", "0.5"} <= set(fit["theta_r"]), fit["reasons"]
-    ens = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / cell / "ensembles.csv")
+    ens = pd.read_csv(ROOT / "studies" / f"kfs_group1_{cell}" / "results" / "ensembles.csv")
     assert fit["tan_phi"] == pytest.approx(ens["tan_phi"].median(), rel=1e-9)
     assert out["delta_deg_lo"] < out["delta_deg"] < out["delta_deg_hi"]
     code, out = _predict(capsys, "--soil", str(card), "--json")  # dektak-1 at D50 0.14 mm: θa 2.5°
@@ -130,7 +130,7 @@ def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
     assert case2["device"] == "periodic" and case2["soil"] == str(card2.path) and "group1_kfs_2d.toml" in why2
     bare, why3 = interface_case(load_card(_card(tmp_path)))
     assert bare == {"soil": str(tmp_path / "sand.toml"), **protocol_for(0.00014, PROTOCOL_3D)} and "3D" in why3
-    other = _card(tmp_path, f'\n[criterion]\ncampaign = "{ROOT / "campaigns" / "real_sand" / "group1_kfs_2d.toml"}"\n')
+    other = _card(tmp_path, f'\n[criterion]\ncampaign = "{ROOT / "studies" / "kfs_group1_2d" / "group1_kfs_2d.toml"}"\n')
     with pytest.raises(InputError, match="not this card") as e:
         interface_case(load_card(other))
     assert "[criterion] campaign" in str(e.value)
@@ -146,7 +146,7 @@ def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
     assert "interface-periodic3d-sawtooth-rt1-" in out and "box-periodic3d-box" in out, out
     import pandas as pd
 
-    g1 = pd.read_csv(ROOT / "docs" / "reproduction" / "real_sand" / "3d" / "summaries.csv", dtype=str)
+    g1 = pd.read_csv(ROOT / "studies" / "kfs_group1_3d" / "results" / "summaries.csv", dtype=str)
     same = g1[g1["label"].isin(["box-periodic3d-box-mu0.9-user-prep0.387-s1",
                                 "interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.5-user-prep0.387-s1"])]
     assert len(same) == 2 and all(cid in out for cid in same["case_id"]), out

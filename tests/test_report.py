@@ -219,7 +219,7 @@ def test_one_group_of_surfaces_holds_out_each_surface():
     same cases by no less than in sample."""
     from interphase.campaign.results import CommittedCurves
 
-    folder = ROOT / "docs" / "reproduction" / "real_sand" / "2d"
+    folder = ROOT / "studies" / "kfs_group1_2d" / "results"
     summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "pair_id": str})
     checks = analyse(summ, campaign=None, store=CommittedCurves(folder / "curves.parquet"), n_boot=0).criterion_check
     assert set(checks["fold"]) == {"in-sample", "surface held out"}
@@ -242,7 +242,7 @@ def test_a_group_too_small_to_fit_without_the_rest_keeps_the_surface_fold():
     campaign's."""
     from interphase.campaign.results import CommittedCurves
 
-    folder = ROOT / "docs" / "reproduction" / "real_sand" / "2d"
+    folder = ROOT / "studies" / "kfs_group1_2d" / "results"
     summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "pair_id": str})
     store = CommittedCurves(folder / "curves.parquet")
     one = analyse(summ, campaign=None, store=store, n_boot=0).criterion_check

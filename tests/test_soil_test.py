@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from interphase.analysis.soil_test import plane_ratio, soil_test_readings
 
 ROOT = Path(__file__).resolve().parents[1]
-KFS_2D = ROOT / "docs" / "reproduction" / "real_sand" / "2d" / "summaries.csv"
+KFS_2D = ROOT / "studies" / "kfs_group1_2d" / "results" / "summaries.csv"
 BIAXIAL_2D = ROOT / "docs" / "soils" / "karlsruhe-fine-sand-2d" / "verification_tmd17_6seeds.csv"
 
 

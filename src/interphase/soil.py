@@ -273,7 +273,7 @@ def criterion_fit(card: SoilCard) -> Path:
     where = f"{card.path}: [criterion] fit"
     if not isinstance(ref, str) or not ref:
         raise InputError("the card names no criterion fitted on its soil", where=where,
-                         fix="run the soil's interface campaign (e.g. campaigns/real_sand/group1_kfs_3d.toml), "
+                         fix="run the soil's interface campaign (e.g. studies/kfs_group1_3d/group1_kfs_3d.toml), "
                              "`campaign report` it, and set [criterion] fit = \"…/criterion.json\" in the card; "
                              "or predict with --fit")
     path = Path(ref) if Path(ref).is_absolute() else (card.path.parent / ref).resolve()

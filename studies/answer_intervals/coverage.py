@@ -27,8 +27,8 @@ from interphase.answer import LEVEL, branch_of, held_out_units, interval_coverag
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 FITS = {"study (reproduction, 930 runs)": ROOT / "src/interphase/data/criterion_reproduction.json",
-        "Karlsruhe 3D card": ROOT / "docs/reproduction/real_sand/3d/criterion.json",
-        "Karlsruhe quasi-2D card": ROOT / "docs/reproduction/real_sand/2d/criterion.json"}
+        "Karlsruhe 3D card": ROOT / "studies/kfs_group1_3d/results/criterion.json",
+        "Karlsruhe quasi-2D card": ROOT / "studies/kfs_group1_2d/results/criterion.json"}
 
 
 def conformal(held_out: dict) -> dict:

@@ -4,7 +4,7 @@ tables the Karlsruhe cards' answers read ([criterion] strength), and E against s
     python studies/stress_density/analyse.py [--check]
 
 Reads each set's committed summaries.csv and curves.parquet (results/<set>/, written by `campaign
-pack` of the study's runs folders) beside the criterion campaigns' own (docs/reproduction/real_sand/),
+pack` of the study's runs folders) beside the criterion campaigns' own (studies/kfs_group1_3d/, kfs_group1_2d/),
 and writes results/strength_3d.csv, results/strength_2d.csv and results/e_2d.csv. --check re-derives
 them and fails if a committed one differs.
 """
@@ -22,7 +22,7 @@ from interphase.campaign.results import CommittedCurves
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-CARD_RUNS = {"3d": ROOT / "docs/reproduction/real_sand/3d", "2d": ROOT / "docs/reproduction/real_sand/2d"}
+CARD_RUNS = {"3d": ROOT / "studies/kfs_group1_3d/results", "2d": ROOT / "studies/kfs_group1_2d/results"}
 STUDY_RUNS = {"3d": HERE / "results" / "soil_3d", "2d": HERE / "results" / "e_2d"}
 
 

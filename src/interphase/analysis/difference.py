@@ -122,3 +122,44 @@ def difference(ref, value, tol: float, *, paired: bool = False) -> Difference:
     if v_ == "undecided" and math.isfinite(lo):
         needed = _seeds_needed(change, sd_r, sd_v, tol, paired)
     return Difference(*r, *v, change, lo, hi, tol, v_, int(a.size), int(b.size), paired, needed)
+
+
+def _log_terms(a: np.ndarray, b: np.ndarray) -> list[tuple[float, int]]:
+    """(variance term, seeds) of ln(mean a / mean b) by the delta method, one per side."""
+    return [(v.var(ddof=1) / (v.size * v.mean() ** 2), v.size) for v in (a, b)]
+
+
+def e_difference(a1, b1, a2, b2, tol: float = 0.05, level: float = 0.95) -> tuple[float, float, float, str]:
+    """E2 − E1 with its `level` interval and the 95 % interval's verdict at ±tol, E = mean a / mean b
+    per side and the four seed groups independent (two interface ensembles over two soil tests, e.g.
+    one surface in two cells): each E's delta-method variance on the log, scaled by E², added;
+    Student t with Welch–Satterthwaite degrees of freedom, as the report's E interval
+    (docs/methods.md)."""
+    a1, b1, a2, b2 = (np.asarray(v, float) for v in (a1, b1, a2, b2))
+    if min(v.size for v in (a1, b1, a2, b2)) < 2:
+        return math.nan, math.nan, math.nan, "undecided"
+    e1, e2 = a1.mean() / b1.mean(), a2.mean() / b2.mean()
+    terms = [(e1 ** 2 * v, n) for v, n in _log_terms(a1, b1)] + [(e2 ** 2 * v, n) for v, n in _log_terms(a2, b2)]
+    var = sum(v for v, _ in terms)
+    df = var ** 2 / sum(v ** 2 / (n - 1) for v, n in terms if v > 0) if var > 0 else 1.0
+    d = e2 - e1
+    h95, h = (stats.t.ppf(0.5 + q / 2, df) * math.sqrt(var) for q in (0.95, level))
+    return d, d - h, d + h, verdict(d - h95, d + h95, tol)
+
+
+def shared_soil_e_difference(a1, a2, b, tol: float = 0.05) -> tuple[float, float, float, str]:
+    """E2 − E1 of two interface ensembles over ONE soil ensemble b: (mean a2 − mean a1)/mean b, with
+    its 95 % interval and verdict at ±tol. The soil enters once, as a scale: var ≈ var_Welch(a2 −
+    a1)/b̄² + d²·s_b²/(n_b·b̄²); Student t with the Welch degrees of freedom of the interface terms
+    (counting b in each E and adding the two E's variances, as e_difference does for two soils,
+    counts its scatter twice and ignores that it moves both E together)."""
+    a1, a2, b = (np.asarray(v, float) for v in (a1, a2, b))
+    if min(v.size for v in (a1, a2, b)) < 2:
+        return math.nan, math.nan, math.nan, "undecided"
+    bm = b.mean()
+    d = (a2.mean() - a1.mean()) / bm
+    v1, v2 = a1.var(ddof=1) / a1.size, a2.var(ddof=1) / a2.size
+    var = (v1 + v2) / bm ** 2 + d ** 2 * b.var(ddof=1) / (b.size * bm ** 2)
+    df = (v1 + v2) ** 2 / (v1 ** 2 / (a1.size - 1) + v2 ** 2 / (a2.size - 1)) if v1 + v2 > 0 else 1.0
+    h = stats.t.ppf(0.975, df) * math.sqrt(var)
+    return d, d - h, d + h, verdict(d - h, d + h, tol)

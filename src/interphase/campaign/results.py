@@ -50,7 +50,7 @@ def write_summaries(summaries: pd.DataFrame, path: Path) -> Path:
 #: points per run in curves.parquet: 200 over a 6 mm shear is one per 0.03 mm, 12 per peak window
 #: (PEAK_WINDOW_D50 × D50 at D50 0.7 mm); the ensembles' tan δ, tan φ and E from them stay within 2 %
 #: of their interval's width of the full curves' (measured: tests/test_restore.py); on the Karlsruhe
-#: sand's quasi-2D Group 1 (24 cases, 4-8 seeds, docs/reproduction/real_sand/2d/) up to 0.003 in E and
+#: sand's quasi-2D Group 1 (24 cases, 4-8 seeds, studies/kfs_group1_2d/results/) up to 0.003 in E and
 #: 0.010 at an end of its interval (5 % of that interval's width)
 CURVE_POINTS = 200
 
@@ -99,6 +99,60 @@ class CommittedCurves:
 
     def case_folder(self, case_id) -> Path:
         return Path("/nonexistent-runs-folder") / str(case_id)
+
+
+def read_committed(folder: str | Path) -> tuple[pd.DataFrame, CommittedCurves]:
+    """(summaries, curves) of a committed runs folder: its summaries.csv (identities as text) and
+    curves.parquet, what every reader of committed runs starts from without a runs folder."""
+    folder = Path(folder)
+    summaries = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str})
+    return summaries, CommittedCurves(folder / "curves.parquet")
+
+
+#: a re-derived table matches its committed copy within these (the fourth-last digit of a float64,
+#: where the BLAS and the platform may move a bootstrap's or an interval's last bits)
+TABLE_RTOL, TABLE_ATOL = 1e-6, 1e-9
+
+
+def same_table(table: pd.DataFrame, path: str | Path) -> bool:
+    """Whether `table`, written as CSV, reads back as the committed CSV at `path`: the same columns
+    and rows, text equal, numbers within TABLE_RTOL/TABLE_ATOL."""
+    import io
+
+    path = Path(path)
+    if not path.exists():
+        return False
+    text = table.to_csv(index=False)
+    if text == path.read_text():
+        return True
+    new, old = pd.read_csv(io.StringIO(text)), pd.read_csv(path)
+    if list(new.columns) != list(old.columns) or new.shape != old.shape:
+        return False
+    for c in new.columns:
+        a, b = new[c], old[c]
+        if pd.api.types.is_numeric_dtype(a) and pd.api.types.is_numeric_dtype(b):
+            if not np.allclose(a.to_numpy(float), b.to_numpy(float), rtol=TABLE_RTOL, atol=TABLE_ATOL, equal_nan=True):
+                return False
+        elif not (a.astype(str).where(a.notna(), "") == b.astype(str).where(b.notna(), "")).all():
+            return False
+    return True
+
+
+def write_or_check(tables: dict, check: bool) -> list[Path]:
+    """A study's re-derived tables ({path: DataFrame}) against their committed CSVs: with `check`,
+    write nothing and return the paths whose table differs (`same_table`) or is missing; else write
+    each one that differs (a match is left as committed, so that a re-derivation does not churn the
+    last digits) and return those written."""
+    out = []
+    for path, table in tables.items():
+        path = Path(path)
+        if same_table(table, path):
+            continue
+        out.append(path)
+        if not check:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            table.to_csv(path, index=False)
+    return out
 
 
 def open_campaign(campaign_path: str | Path, output: str | Path | None = None, engines=None):
