@@ -388,7 +388,7 @@ def test_second_run_status_and_a_deleted_index_while_a_run_writes(tmp_path, caps
 # ---- SLURM -------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def slurm(tmp_path_factory):
-    from slurm_cluster import SlurmCluster
+    from tests.slurm_cluster import SlurmCluster
 
     need_binary("liggghts")
     with SlurmCluster(tmp_path_factory.mktemp("slurm")) as cluster:
