@@ -21,8 +21,9 @@ one case (`render`, `run_case`), campaigns (`stop`, `crosscheck`, `compare`, `pa
 Arguments are SI (m, Pa, m/s; friction as a coefficient; angles in degrees only where the name says
 `_deg`), whatever unit the command's option takes. One kind of result, one type: a table is a
 DataFrame; one result per stress, record or table written is a list of dicts; one result is a dict
-(JSON-able: what the command's --json prints, numbers and paths) or, where it has behaviour of its
-own, its object (`Campaign`, `PlannedCase`, `RunReport`, `CrosscheckReport`, `Answer`). Angles in
+(numbers, strings and paths: what the command's --json prints, plus the few keys only its text
+reads, each named in the function's docstring) or, where it has behaviour of its own, its object
+(`Campaign`, `PlannedCase`, `RunReport`, `CrosscheckReport`, `Answer`). Angles in
 tables are in degrees as the column names say (`*_deg`; ψ from vertical, docs/methods.md). Bad input
 raises `interphase.errors.InputError` naming the option as the command spells it, and the fix.
 A campaign function takes a campaign file's path or a loaded `Campaign`, and `runs=` where the runs
