@@ -217,7 +217,7 @@ def test_report_onto_an_existing_folder_leaves_it_byte_identical(quick_campaign,
 
 
 def test_validate_names_only_cards_that_ship_and_only_their_own_sand():
-    from interphase.api import SHIPPED_CARDS, _shipped_card
+    from interphase.api.validation import SHIPPED_CARDS, _shipped_card
 
     assert all((ROOT / "soils" / card).is_file() for _, card in SHIPPED_CARDS)
     lab = ROOT / "lab" / "x.csv"

@@ -25,7 +25,7 @@ def test_help_lists_every_command_and_each_has_its_own_help(capsys):
 
 
 def test_status_messages_wrap_between_words_never_inside_a_path():
-    from interphase.cli import _wrap
+    from interphase.cli_text import _wrap
 
     path = "/tmp/" + "very-long-folder-name/" * 8 + "contacts.parquet"
     text = _wrap(f"abcd1234 corrupt: {path} does not verify; rerun with --rerun-failed", 40)

@@ -81,7 +81,7 @@ def test_element_with_a_bad_stress_leaves_no_file(tmp_path):
     card = tmp_path / "card.toml"
     card.write_text((ROOT / "tests" / "data" / "soils" / "tiny_card.toml").read_text())
     for bad in (-5, 0, float("nan")):
-        with pytest.raises(ip.InputError, match="normal_stress"):
+        with pytest.raises(ip.InputError, match="--normal-stress"):
             ip.element(card, bad)
     with pytest.raises(ip.InputError, match="seeds"):
         ip.element(card, 100e3, seeds=0)

@@ -16,6 +16,7 @@ The Python API (interphase.api; the `campaign` command does the same):
     ip.calibrate("TARGET.toml")                     # grain parameters from a laboratory soil → a card
     ip.validate("lab/FILE.csv", soil="soils/NAME.toml")   # the criterion against laboratory tests
     ip.lab_record("lab/soils/ottawa-f65/FILE.csv")  # a laboratory triaxial record: φ_peak, ψ_max, end
+interphase.api has the rest, one function per `campaign` command (theta_a, render, report, cell, …).
 An example that runs end to end: docs/api_example.py.
 
 Units are SI inside the code (m, N, Pa, s, radians); profile generators take sizes in D50 units.

@@ -261,9 +261,9 @@ def predict(profile, *, friction: float | None = None, smooth_delta_deg: float |
             raise InputError("a fit alone has no soil tests at other stresses or densities: the option would be ignored",
                              where="--normal-stress" if normal_stress is not None else "--relative-density",
                              fix="give --soil CARD, whose soil tests measured them, or drop the option")
-        if not (isinstance(d50, (int, float)) and math.isfinite(d50) and d50 > 0):
-            raise InputError("no grain size given" if d50 is None else f"must be a positive diameter, got {d50!r}",
-                             where="--d50", fix="give --d50 MM (the grains' median diameter), or --soil CARD")
+        if d50 is None:             # a given one is checked by the API (interphase.api.checks.d50)
+            raise InputError("no grain size given", where="--d50",
+                             fix="give --d50 MM (the grains' median diameter), or --soil CARD")
         model = criterion_model(mu, fit_path, tan_phi)
         state = {"tan_phi": model.tan_phi, "half": math.nan, "stress": None, "preparation": None, "dr": None,
                  "source": "given (--tan-phi)" if tan_phi is not None else f"the fit's simulated soil ({model.source})",

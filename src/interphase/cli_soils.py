@@ -1,10 +1,13 @@
-"""The soil commands of `campaign`: `element` (the soil's own test) and `calibrate` (grain parameters
-from a laboratory target). Argument parsing and printing only; the work is in interphase.soil,
-campaign.element and campaign.calibrate."""
+"""The soil commands of `campaign`: `element` (the soil's own tests), `density`, `calibrate` (grain
+parameters from a laboratory target), `validate` and `lab-record`. Argument parsing and printing
+only: each command calls its function of interphase.api."""
 
 from __future__ import annotations
 
 import sys
+
+from interphase import api
+from interphase.errors import InputError
 
 
 def add_soils(sub, print_json) -> None:
@@ -87,187 +90,93 @@ def _run_options(p, runs: str) -> None:
     p.add_argument("--json", action="store_true", help="print JSON")
 
 
-def _check_seeds(n: int) -> None:
-    from interphase.errors import InputError
-
-    if n < 1:
-        raise InputError(f"must be ≥ 1, got {n}", where="--seeds", fix="give the number of packing seeds, e.g. 3")
+def _stream(args):
+    """Where a running command says what it does: stderr with --json (stdout stays parseable)."""
+    return sys.stderr if args.json else sys.stdout
 
 
-def _positive(value, flag: str, unit: str, example: str) -> None:
-    import math
-
-    from interphase.errors import InputError
-
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"must be > 0 {unit}, got {value!r}", where=flag, fix=f"e.g. {flag} {example}")
+def _runs(args) -> dict:
+    """The options every soil command that runs cases takes (_run_options), as the API's arguments."""
+    return {"runs": args.runs, "executor": args.executor, "jobs": args.jobs, "rerun_failed": args.rerun_failed,
+            "stream": _stream(args)}
 
 
-def _quick_note(card, stream) -> None:
-    """Every command that reads a --quick card says so."""
-    if card.quick:
-        runs = card.extra.get("calibration", {}).get("runs", "?")
-        print(f"warning: {card.path} is a --quick calibration ({runs} runs): a first look, not a calibrated soil",
-              file=stream)
+def _num(v) -> float:
+    """A result's number for the text: None (undefined, as JSON has it) reads nan."""
+    return float("nan") if v is None else v
+
+
+def _iv(r: dict, name: str, fmt: str = ".1f") -> str:
+    """`name` of a result with its 95 % interval when it has one."""
+    v, lo, hi = (_num(r[name + k]) for k in ("", "_lo", "_hi"))
+    return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
 
 
 def _cmd_element(args, print_json) -> int:
-    from interphase.campaign.element import element_failures, run_element
-    from interphase.campaign.folders import element_runs
-    from interphase.errors import InputError
-    from interphase.soil import load_card
-
-    card = load_card(args.card)
-    _quick_note(card, sys.stderr)
-    _check_seeds(args.seeds)
     if args.test in ("triaxial", "biaxial") or ((args.confining_stress or args.record) and args.test is None):
         return _cmd_cell(args, print_json)
     if args.record or args.report:
         raise InputError("--record and --report are for the laboratory's test", where="--record/--report",
                          fix="add --test triaxial (3D) or --test biaxial (quasi-2D), or drop them")
-    if not args.normal_stress:
-        raise InputError("no stress given", where="--normal-stress",
-                         fix="direct shear: --normal-stress PA; the laboratory's test: --confining-stress PA")
-    for s in args.normal_stress:
-        _positive(s, "--normal-stress", "Pa", "100e3")
-    if args.shear_velocity is not None:
-        _positive(args.shear_velocity, "--shear-velocity", "m/s", "0.02")
-    stream = sys.stderr if args.json else sys.stdout
-    runs, runs_from = element_runs(card.path, card.name, args.runs)
-    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
-    results = run_element(card, args.normal_stress, range(1, args.seeds + 1), output=runs, executor=args.executor,
-                          jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed,
-                          shear_velocity=args.shear_velocity)
-    failed = element_failures(card, runs) if any(r.n_seeds < args.seeds for r in results) else []
+    rows = api.element(args.card, args.normal_stress, args.seeds, shear_velocity=args.shear_velocity, **_runs(args))
+    failed = rows[0]["failed"] if rows else []
     for line in failed:
         print(f"failed: {line}", file=sys.stderr)
     if failed:
         print("(a failed run is kept; `campaign element … --rerun-failed` runs it again)", file=sys.stderr)
     if args.json:
-        rows = [r.to_dict() | {"runs": str(runs), "card_quick": card.quick, "failed": failed} for r in results]
-        print_json(rows)          # one shape: a list, one entry per stress
-        return 0 if all(r.n_seeds for r in results) else 1
-    for r in results:
-        _print_element(card, r)
-    return 0 if all(r.n_seeds for r in results) else 1
+        print_json([{k: v for k, v in r.items() if k != "card"} for r in rows])   # one shape: a list, one entry per stress
+    else:
+        for r in rows:
+            _print_element(r)
+    return 0 if all(r["n_seeds"] for r in rows) else 1
 
 
-def _print_element(card, r) -> None:
-    def iv(name, fmt=".1f"):
-        v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
-        return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
-    if not r.n_seeds:
-        print(f"{card.name} at {r.normal_stress / 1e3:g} kPa: no seed finished (the causes are above)")
+def _print_element(r: dict) -> None:
+    if not r["n_seeds"]:
+        print(f"{r['card']} at {r['normal_stress'] / 1e3:g} kPa: no seed finished (the causes are above)")
         return
-    print(f"{card.name} at {r.normal_stress / 1e3:g} kPa, {r.n_seeds} seeds: φ_peak {iv('phi_peak_deg')}°, "
-          f"φ_cs {iv('phi_cs_deg')}°, ψ_max {iv('psi_max_deg')}°, solid fraction {iv('solid_fraction', '.3f')}, "
-          f"peak at {r.peak_disp * 1e3:.2f} of {r.shear_distance * 1e3:.2f} mm")
-    if r.note:
-        print(f"  note: {r.note}")
+    print(f"{r['card']} at {r['normal_stress'] / 1e3:g} kPa, {r['n_seeds']} seeds: φ_peak {_iv(r, 'phi_peak_deg')}°, "
+          f"φ_cs {_iv(r, 'phi_cs_deg')}°, ψ_max {_iv(r, 'psi_max_deg')}°, solid fraction {_iv(r, 'solid_fraction', '.3f')}, "
+          f"peak at {_num(r['peak_disp']) * 1e3:.2f} of {_num(r['shear_distance']) * 1e3:.2f} mm")
+    if r["note"]:
+        print(f"  note: {r['note']}")
 
 
 def _cmd_cell(args, print_json) -> int:
-    from interphase.campaign.cell import run_cell
-    from interphase.campaign.folders import element_runs
-    from interphase.errors import InputError
-    from interphase.soil import load_card
-
     if args.record:
         return _cmd_records(args, print_json)
-    if not args.confining_stress:
-        raise InputError("no confining stress given", where="--confining-stress",
-                         fix="e.g. --confining-stress 100e3, or --record FILE to test at a laboratory record's")
-    for s in args.confining_stress:
-        _positive(s, "--confining-stress", "Pa", "100e3")
-    card = load_card(args.card)
-    stream = sys.stderr if args.json else sys.stdout
-    runs, runs_from = element_runs(card.path, card.name, args.runs)
-    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
-    results = run_cell(card, args.confining_stress, range(1, args.seeds + 1), test=args.test,
-                       relative_density=args.relative_density, output=runs, executor=args.executor,
-                       jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
-    if args.report:
-        from interphase.campaign.cell_records import model_runs
-        from interphase.report.verification import write_report
-
-        test = args.test or card.cell["test"]
-        dr = card.relative_density if args.relative_density is None else args.relative_density
-        curves = model_runs(runs, card, test, dr)
-        pairs = [(f"{r.test}, {r.confining_stress / 1e3:g} kPa, Dr {r.relative_density:.2f}", None,
-                  curves[r.confining_stress]) for r in results]
-        for p in write_report(args.report, [], pairs):
-            print(f"report: {p}", file=stream)
+    rows = api.cell(args.card, args.confining_stress, args.seeds, test=args.test,
+                    relative_density=args.relative_density, report=args.report, **_runs(args))
     if args.json:
-        rows = [r.to_dict() for r in results]
-        print_json(rows)          # one shape: a list, one entry per stress
-        return 0 if all(r.n_seeds for r in results) else 1
-    for r in results:
-        def iv(name, fmt=".1f"):
-            v, lo, hi = (getattr(r, name + k) for k in ("", "_lo", "_hi"))
-            return f"{v:{fmt}}" + (f" ({lo:{fmt}}–{hi:{fmt}})" if lo == lo else "")
-        dr = f", Dr {r.relative_density:.2f}" if r.relative_density == r.relative_density else ""
-        print(f"{card.name}, {r.test} at σ3′ {r.confining_stress / 1e3:g} kPa, {r.n_seeds} seeds: "
-              f"φ_peak {iv('phi_peak_deg')}° at ε1 {100 * r.eps1_at_peak:.1f} %, ψ_max {iv('psi_max_deg')}°, "
-              f"φ at ε1 {100 * r.eps1_end:.0f} % {iv('phi_cs_deg')}°, e0 {iv('void_ratio', '.3f')}{dr} "
-              f"(preparation {r.preparation:g})")
-        if r.note:
-            print(f"  note: {r.note}")
-    return 0 if all(r.n_seeds for r in results) else 1
+        print_json([{k: v for k, v in r.items() if k != "card"} for r in rows])   # one shape: a list, one entry per stress
+        return 0 if all(r["n_seeds"] for r in rows) else 1
+    for r in rows:
+        dr = f", Dr {r['relative_density']:.2f}" if r["relative_density"] is not None else ""
+        print(f"{r['card']}, {r['test']} at σ3′ {r['confining_stress'] / 1e3:g} kPa, {r['n_seeds']} seeds: "
+              f"φ_peak {_iv(r, 'phi_peak_deg')}° at ε1 {100 * _num(r['eps1_at_peak']):.1f} %, ψ_max {_iv(r, 'psi_max_deg')}°, "
+              f"φ at ε1 {100 * _num(r['eps1_end']):.0f} % {_iv(r, 'phi_cs_deg')}°, e0 {_iv(r, 'void_ratio', '.3f')}{dr} "
+              f"(preparation {_num(r['preparation']):g})")
+        if r["note"]:
+            print(f"  note: {r['note']}")
+    return 0 if all(r["n_seeds"] for r in rows) else 1
 
 
 def _cmd_records(args, print_json) -> int:
     """`campaign element CARD --record FILE …`: the card's test at each record's σ3′ and Dr0, verdicts."""
-    from pathlib import Path
-
-    from interphase.campaign.cell_records import check_record, index_void_ratios
-    from interphase.campaign.folders import element_runs
-    from interphase.report.verification import markdown, write_report
-    from interphase.errors import InputError
-    from interphase.soil import load_card
-
-    card = load_card(args.card)
     if args.confining_stress or args.relative_density is not None:
         raise InputError("a record sets the test's stress and density itself",
                          where="--confining-stress/--relative-density", fix="drop them, or drop --record")
-    test = args.test or card.cell["test"]
-    if test != card.cell["test"]:
-        raise InputError(f"the card's cell runs the {card.cell['test']} test, not {test}", where="--test",
-                         fix=f"--test {card.cell['test']}, or a card of the other test")
-    index_void_ratios(card)                 # before any run: a card without them is refused at once
-    stream = sys.stderr if args.json else sys.stdout
-    runs, runs_from = element_runs(card.path, card.name, args.runs)
-    print(f"element {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
-    rows, pairs = [], []
-    for path in args.record:
-        row, pair = check_record(card, Path(path), list(range(1, args.seeds + 1)), runs, executor=args.executor,
-                                 jobs=args.jobs, stream=stream, rerun_failed=args.rerun_failed)
-        rows.append(row)
-        pairs.append(pair)
-    if args.report:
-        for p in write_report(args.report, rows, pairs):
-            print(f"report: {p}", file=stream)
+    rows = api.records(args.card, args.record, args.seeds, test=args.test, report=args.report, **_runs(args))
     if args.json:
         print_json(rows)
     else:
-        import pandas as pd
-
-        print(markdown(pd.DataFrame(rows)))
+        print(api.records_markdown(rows))
     return 0 if all(r["n_seeds"] for r in rows) else 1
 
 
 def _cmd_density(args, print_json) -> int:
-    from interphase.campaign.density import measure_density
-    from interphase.soil import load_card
-
-    from interphase.campaign.density import density_runs
-
-    _check_seeds(args.seeds)
-    card = load_card(args.card)
-    stream = sys.stderr if args.json else sys.stdout
-    runs, runs_from = density_runs(card, args.runs)
-    print(f"density {card.name}: runs folder {runs} ({runs_from})", file=stream, flush=True)
-    out = measure_density(card, range(1, args.seeds + 1), output=runs, executor=args.executor, jobs=args.jobs,
-                          stream=stream, rerun_failed=args.rerun_failed)
+    out = api.density(args.card, args.seeds, **_runs(args))
     if args.json:
         print_json(out)
         return 0
@@ -279,26 +188,18 @@ def _cmd_density(args, print_json) -> int:
 
 
 def _cmd_calibrate(args, print_json) -> int:
-    from interphase.campaign.calibrate import calibrate
-    from interphase.campaign.calibrate_cell import calibrate_cell, is_cell_target
-
-    if is_cell_target(args.target):
-        result = calibrate_cell(args.target, quick=args.quick, card_path=args.output, output=args.runs,
-                                executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
-                                rerun_failed=args.rerun_failed, restore=args.restore)
-        if args.json:
-            print_json(result)
-        else:
-            _print_cell_calibration(result)
-        return 0
-
-    nan = float("nan")
-    result = calibrate(args.target, quick=args.quick, card_path=args.output, output=args.runs,
-                       executor=args.executor, jobs=args.jobs, stream=sys.stderr if args.json else sys.stdout,
-                       rerun_failed=args.rerun_failed, restore=args.restore)
+    result = api.calibrate(args.target, quick=args.quick, output=args.output, restore=args.restore, **_runs(args))
     if args.json:
         print_json(result)
-        return 0
+    elif "density" in result:          # a record target's card: the cell's calibration
+        _print_cell_calibration(result)
+    else:
+        _print_calibration(result)
+    return 0
+
+
+def _print_calibration(result: dict) -> None:
+    nan = float("nan")
     quick = " (--quick: a first look, not a calibrated soil)" if result["calibration"].get("quick") else ""
     print(f"soil card {'read back' if result.get('reused') else 'written'}: {result['card']}{quick}")
     for k, v in result["chosen"].items():
@@ -311,7 +212,6 @@ def _cmd_calibrate(args, print_json) -> int:
         for c in v["checks"]:
             print(f"  held out, {v['normal_stress'] / 1e3:g} kPa, {c['quantity']}: laboratory {c['laboratory']:.1f}°, "
                   f"measured {c['measured']:.1f}° ({c.get('lo', nan):.1f}–{c.get('hi', nan):.1f}): {c.get('verdict', '?')}")
-    return 0
 
 
 def _print_cell_calibration(result: dict) -> None:
@@ -329,11 +229,8 @@ def _print_cell_calibration(result: dict) -> None:
 def _cmd_validate(args, print_json) -> int:
     import json
 
-    from interphase.api import validate
-    _check_seeds(args.seeds)
-    res = validate(args.lab, soil=args.soil, fit=args.fit, simulate=args.simulate, seeds=args.seeds,
-                   output=args.output, runs=args.runs, executor=args.executor, jobs=args.jobs,
-                   rerun_failed=args.rerun_failed, stream=sys.stderr if args.json else sys.stdout)
+    res = api.validate(args.lab, soil=args.soil, fit=args.fit, simulate=args.simulate, seeds=args.seeds,
+                       output=args.output, **_runs(args))
     df, sk, miss = res["table"], res["skill"], res["largest_miss"]
     if args.json:
         print_json(res | {"table": json.loads(df.to_json(orient="records")),
@@ -351,9 +248,7 @@ def _cmd_validate(args, print_json) -> int:
 
 
 def _cmd_lab_record(args, print_json) -> int:
-    from interphase.api import lab_record
-
-    rows = [lab_record(f) for f in args.files]           # every file read before anything is printed
+    rows = [api.lab_record(f) for f in args.files]           # every file read before anything is printed
     if args.json:
         print_json(rows)
         return 0

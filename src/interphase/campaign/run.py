@@ -52,14 +52,17 @@ class RunReport:
     statuses: dict = field(default_factory=dict)      # case id → status of this run
     interrupted: bool = False
     stopped: str | None = None                        # why the run stopped early (not a user's Ctrl-C)
+    dry_run: bool = False                             # nothing ran: what would run was said
 
     def count(self, status: str) -> int:
         return sum(1 for s in self.statuses.values() if s == status)
 
     @property
     def exit_code(self) -> int:
-        """0: every case of the campaign is finished; 1: some failed or were killed, or the run stopped
-        itself (a full disk); 130: interrupted."""
+        """0: every case of the campaign is finished, or a dry run; 1: some failed or were killed, or the
+        run stopped itself (a full disk); 130: interrupted."""
+        if self.dry_run:
+            return 0
         if self.stopped:
             return 1
         if self.interrupted:
@@ -449,6 +452,7 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
     (through the index, as `campaign status` does): a corrupt one is listed as kept, or as rerun with
     `rerun_failed`; a case without a folder whose id is a row of `restore` (a summaries table) as
     restored. `stop_after_sample`: a campaign over LARGE without --yes: the sample, then stop."""
+    report.dry_run = True
     record = set()
     if restore is not None:
         from interphase.campaign.restore import restorable_ids

@@ -153,20 +153,6 @@ def simulate(table, card, seeds, *, output: Path, executor: str | None = None, j
     return out
 
 
-def check_dem_request(friction, seeds: int, normal_stress, names=("friction", "seeds", "normal_stress")) -> None:
-    """A DEM request's numbers, each refused with an InputError naming it as the caller spells it
-    (`names`: the API's arguments, or the CLI's flags)."""
-    import math
-
-    if not (isinstance(friction, (int, float)) and math.isfinite(friction) and friction >= 0):
-        raise InputError(f"must be a friction coefficient ≥ 0, got {friction!r}", where=names[0])
-    if not (isinstance(seeds, int) and seeds >= 3):
-        raise InputError(f"must be ≥ 3 (the fewest seeds a peak's interval is given for), got {seeds!r}",
-                         where=names[1], fix="e.g. 3")
-    if not (isinstance(normal_stress, (int, float)) and math.isfinite(normal_stress) and normal_stress > 0):
-        raise InputError(f"must be > 0 Pa, got {normal_stress!r}", where=names[2], fix="e.g. 100e3")
-
-
 def with_dem(pred: pd.DataFrame, dem: pd.DataFrame) -> pd.DataFrame:
     df = pred.merge(dem, on="row", how="left")
     df["error_dem_deg"] = df["delta_dem_deg"] - df["delta_measured_deg"]

@@ -614,8 +614,9 @@ def build_report(campaign_path: str | Path, out: str | Path | None = None, lab: 
     """The report of a campaign's finished runs (`engines`: as results.open_campaign) in `out`
     (default RUNS/report). A report already there is never replaced: a given `out` that holds one is
     refused (InputError, a new name suggested); the default folder moves on to report-2, report-3, …"""
+    given = _report_folder(out, None) if out is not None else None     # refused before the runs are read
     campaign, store, summ = open_campaign(campaign_path, output, engines)
-    folder = _report_folder(out, Path(campaign.output) / "report")
+    folder = given or _report_folder(None, Path(campaign.output) / "report")
     try:
         res = report_from_summaries(summ, folder, campaign=campaign, store=store,
                                     lab=lab, n_boot=n_boot)
