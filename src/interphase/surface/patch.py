@@ -85,6 +85,7 @@ class Window:
     mismatch: float                 # the edge-mismatch score (relative; module docstring, step 3)
     direction: str
     name: str
+    at: tuple[int, int] = (0, 0)    # the window's first node in the turned grid (`oriented`)
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,7 +99,8 @@ class Patch:
     direction: str                  # the sense of shear over the scan the cell's +x is
     origin: tuple[float, float]     # the window's corner in the file's frame [m]
     mismatch: float                 # the window's edge-mismatch score (relative)
-    closure_rms: float              # rms of what the closure changed, the window's tilt aside [m]
+    closure_rms: float              # rms of what the closure changed, less that change's own plane (a
+                                    # tilt: levelling) [m]
     closure_max: float              # the largest such change [m]
 
     def __post_init__(self):
@@ -272,7 +274,8 @@ def cut_window(scan: Scan, d50: float, length: float, depth: float, direction: s
             raise InputError(f"the window at ({window[0] * 1e3:.4g}, {window[1] * 1e3:.4g}) mm holds missing points",
                              where=scan.name, fix="move it, or omit window (the best-closing window is chosen)")
     origin = (float(scan.x[ci[a, b]]), float(scan.y[cj[a, b]]))
-    return Window(Z[a:a + nx + 1, b:b + ny + 1].copy(), hx, hy, origin, float(score[a, b]), direction, scan.name)
+    return Window(Z[a:a + nx + 1, b:b + ny + 1].copy(), hx, hy, origin, float(score[a, b]), direction, scan.name,
+                  (int(a), int(b)))
 
 
 def _wrapped(u: np.ndarray) -> np.ndarray:
@@ -358,8 +361,7 @@ def make_patch(scan: Scan, d50: float, length: float, depth: float, direction: s
     frame; `min_step` [m] the finest mesh step."""
     w = cut_window(scan, d50, length, depth, direction, window)
     u = close_slopes(w.z, w.hx, w.hy)
-    change = u - _plane_residual(w.z)
-    change -= change.mean()
+    change = _plane_residual(u - w.z)          # what the closure changed, its tilt (levelling) aside
     nx, ny = w.z.shape[0] - 1, w.z.shape[1] - 1
     patch = Patch(np.arange(nx + 1) * w.hx, np.arange(ny + 1) * w.hy, u, scan.name, direction, w.origin, w.mismatch,
                   float(np.sqrt(np.mean(change ** 2))), float(np.abs(change).max()))
