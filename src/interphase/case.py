@@ -6,7 +6,9 @@ repr of the round-tripped value, keys sorted (signac style).
 
 Geometry: the soil box is `box_length_d50` × `box_height_d50` (D50 units) in the x–z plane, quasi-2D
 (one grain layer in y), except in the 3D device (`device = "periodic3d"`, docs/3d.md): periodic in x
-and y, `box_depth_d50` deep in y, grains filling the depth, the profile extruded over it. For `test = "interface"` the rough surface (profile) slides in x beneath
+and y, `box_depth_d50` deep in y, grains filling the depth, the profile extruded over it (or, with
+`profile_y`, z = p(x) + q(y); or, with an areal scan as the profile, the scan's closed patch:
+`surface_patch`). For `test = "interface"` the rough surface (profile) slides in x beneath
 the soil held in the box; for `test = "box"` a direct shear box of two halves is sheared on the
 mid-height plane (no profile).
 """
@@ -127,6 +129,12 @@ class Case:
         if self.profile_y is not None and not (self.three_d and self.test == "interface"):
             bad("profile_y", "only an interface test in the 3D device has relief across the shear",
                 'use device = "periodic3d" and test = "interface", or remove profile_y')
+        if self.profile is not None and self.profile.areal:
+            if not (self.three_d and self.test == "interface"):
+                bad("profile", "an areal scan's patch is the surface of the 3D cell's interface test only",
+                    'use device = "periodic3d" and test = "interface", or shear a line of the scan (remove areal)')
+            if self.profile_y is not None:
+                bad("profile_y", "an areal scan's patch has its own relief across the shear", "remove profile_y")
         if self.profile_y is not None and not isinstance(self.profile_y, ProfileSpec):
             bad("profile_y", f"must be a profile table, got {self.profile_y!r}",
                 'e.g. profile_y = {kind = "sawtooth", rt = 0.2, sw = 2, sr = 0}')
@@ -210,6 +218,8 @@ class Case:
         """The 3D cell's depth in y [m] (box_depth_d50·D50); NaN for the quasi-2D devices."""
         if not self.three_d:
             return math.nan
+        if self.test == "interface" and self.profile.areal:
+            return self._patch.width
         return self._cell_y.length if self.profile_y is not None else self.box_depth_d50 * self.d50
 
     @property
@@ -227,7 +237,23 @@ class Case:
         generated and cut, see surface.builder.periodic_cell)."""
         from interphase.surface.builder import periodic_cell
 
+        if self.profile.areal:      # the patch's x–z silhouette: its length and highest point
+            return self._patch.silhouette()
         return periodic_cell(self.profile, self.d50, self.box_length_d50 * self.d50, self._extruded_over)
+
+    @functools.cached_property
+    def _patch(self):
+        from interphase.surface.builder import areal_patch
+
+        return areal_patch(self.profile, self.d50, self.box_length_d50 * self.d50, self.box_depth_d50 * self.d50)
+
+    def surface_patch(self):
+        """An areal scan's closed patch (surface.patch.Patch: heights over [0, L] × [0, W], x from the
+        cell's start, y from its side −W/2), the surface the 3D cell shears; None for every other case.
+        `surface()` is then its x–z silhouette (the highest point across y at each x)."""
+        if self.test == "interface" and self.profile is not None and self.profile.areal:
+            return self._patch
+        return None
 
     @functools.cached_property
     def _cell_y(self):
@@ -251,7 +277,8 @@ class Case:
     def _extruded_over(self) -> float | None:
         """The width the surface's profile is extruded over [m] (its triangles span it; what a
         measured line's sampling must allow, surface.builder.mesh_step), None with a relief across."""
-        return None if self.profile_y is not None else self.wall_width
+        areal = self.profile is not None and self.profile.areal
+        return None if self.profile_y is not None or areal else self.wall_width
 
     @property
     def thickness(self) -> float:
@@ -403,7 +430,8 @@ def _case_from_dict(data: dict, where: str, base_dir) -> Case:
     """Build a Case from plain data (a TOML table), SI units, field names as in Case.
 
     `profile` is a table: {kind = "sawtooth", rt = 1, sw = 2, sr = 0} (D50 units), or
-    {kind = "file", path = "x.csv", units = "um", cutoff = 0.0008}; a relative path is taken from
+    {kind = "file", path = "x.csv", units = "um", cutoff = 0.0008}, or an areal scan as the 3D cell's
+    surface {kind = "file", path = "s.frt", areal = true, direction = "+y"}; a relative path is taken from
     `base_dir` (the campaign file's folder). `gradation` is "mono" | "poly" or
     {sizes = [m...], fractions = [...]}. Unknown keys are refused with a did-you-mean.
     `where` prefixes every message (e.g. "group1.toml: [case]"). `profile_y` (the 3D device's
@@ -466,7 +494,7 @@ def _profile_spec(prof, where: str, base_dir) -> ProfileSpec:
     kind = prof.pop("kind")
     if kind != "file":
         return ProfileSpec.make(kind, where=where, **prof)
-    allowed = {"path", "units", "cutoff", "axis", "line", "direction"}
+    allowed = {"path", "units", "cutoff", "axis", "line", "direction", "areal", "window"}
     for k in prof:
         if k not in allowed:
             raise InputError(f"unknown key {k!r} in a file profile", where=where, fix=_did_you_mean(k, allowed))
@@ -476,4 +504,5 @@ def _profile_spec(prof, where: str, base_dir) -> ProfileSpec:
     if base_dir is not None and not path.is_absolute():
         path = Path(base_dir) / path
     return file_spec(path, units=prof.get("units"), cutoff=prof.get("cutoff"), where=where, axis=prof.get("axis"),
-                     line=prof.get("line"), direction=prof.get("direction", "+"))
+                     line=prof.get("line"), direction=prof.get("direction", "+"), areal=prof.get("areal", False),
+                     window=prof.get("window"))

@@ -340,7 +340,9 @@ def specimen(case, particles, contacts: pd.DataFrame) -> Stage:
 # ---- profile -------------------------------------------------------------------------------------
 
 def profile_features(case) -> Stage:
-    """θa (both filters), Rn, Rnc and the mean asperity slope of an interface case's profile."""
+    """θa (both filters), Rn, Rnc and the mean asperity slope of an interface case's profile; of an
+    areal scan's closed patch (Case.surface_patch), the same of the normals pooled over the patch's
+    grid lines along the shear, each read as periodic (surface.patch.theta_a_patch)."""
     out = Stage(values=dict.fromkeys(PROFILE_KEYS, math.nan))
     if case.test != "interface" or case.profile is None:
         out.reasons = dict.fromkeys(PROFILE_KEYS, "box test: no surface profile")
@@ -348,12 +350,18 @@ def profile_features(case) -> Stage:
     from interphase.surface.normals import theta_a_filters
     from interphase.surface.builder import from_spec
 
-    # the surface the engine sheared (Case.sheared_surface); a saw-tooth is periodic: the trace of n
-    # periods is n copies of one period's, so one period gives the same θa, Rn, Rnc and slope at 1/n
-    # of the cost
-    periodic = case.profile.kind in ("sawtooth", "asymmetric")
-    prof = from_spec(case.profile, case.d50, case.d50) if periodic else case.sheared_surface()
-    t = theta_a_filters(prof, case.d50, (92, 90))
+    patch = case.surface_patch() if hasattr(case, "surface_patch") else None
+    if patch is not None:       # an areal scan's closed patch: the pooled θa of its lines along the shear
+        from interphase.surface.patch import theta_a_patch
+
+        t = theta_a_patch(patch, case.d50, (92, 90))["+x"]
+    else:
+        # the surface the engine sheared (Case.sheared_surface); a saw-tooth is periodic: the trace of
+        # n periods is n copies of one period's, so one period gives the same θa, Rn, Rnc and slope at
+        # 1/n of the cost
+        periodic = case.profile.kind in ("sawtooth", "asymmetric")
+        prof = from_spec(case.profile, case.d50, case.d50) if periodic else case.sheared_surface()
+        t = theta_a_filters(prof, case.d50, (92, 90))
     t92, t90 = t[92], t[90]
     out.values.update(theta_a_deg_92=t92.theta_a_deg, theta_a_deg_90=t90.theta_a_deg, rn=t92.rn, rnc=t92.rnc,
                       mean_slope_deg=t92.mean_slope_deg)

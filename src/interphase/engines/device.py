@@ -19,7 +19,8 @@ A servo platen holds σ·L·t on top of the soil (t = D50, the quasi-2D thicknes
 The 3D device (Case.three_d, docs/3d.md) is the periodic one made deep: also periodic in y over
 [−W/2, W/2] (W = Case.box_depth = t), grains on a 3D lattice filling it, every wall (surface,
 platen, the box test's floor) extruded over exactly that depth (`wall_reach` = W/2); a case with
-relief across the shear (Case.profile_y) has the areal surface z = p(x) + q(y) as its mesh instead.
+relief across the shear (Case.profile_y) has the areal surface z = p(x) + q(y) as its mesh instead,
+and a case on an areal scan its closed patch (Case.surface_patch: two triangles a grid cell).
 """
 
 from __future__ import annotations
@@ -227,11 +228,14 @@ def _periodic(case: Case, recipe: Recipe) -> Device:
     surface_mesh = None
     lattice = lattice_packing_3d if case.three_d else lattice_packing
     if case.test == "interface":
-        prof, across = case.surface(), case.surface_across()
+        prof, across, patch = case.surface(), case.surface_across(), case.surface_patch()
         top, z_lo = float(prof.z.max()), float(prof.z.min()) - d_max
         if across is not None:     # z(x, y) = p(x) + q(y): its highest and lowest points add
             top, z_lo = top + float(across.z.max()), z_lo + float(across.z.min())
             surface_mesh = separable_triangles(prof, across, -case.box_depth / 2)
+        if patch is not None:      # a scan's patch: the lattice starts above its highest point
+            top, z_lo = float(patch.z.max()), float(patch.z.min()) - d_max
+            surface_mesh = patch.triangles(-case.box_depth / 2)
         pack = lattice(case, 0.0, L, top + 0.02 * d_max)
         moving = _segments(prof.x, prof.z)
         window = (0.0, L, top + d_max)

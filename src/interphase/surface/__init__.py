@@ -7,6 +7,7 @@ Layers, each importing only those below it (tests/test_surface_layers.py holds i
   profiles          generated profiles and their geometry (crop, tile, close)
   trace, roughness, normals, areal, mesh, plot
                     the centroid trace, Rn/Rnc, θa of a line and of an areal scan, STL, figures
+  patch             an areal scan's window closed on itself (the 3D cell's surface) and its θa
   readers           every file format (SurfaceTopography's instrument files, two-column text)
   spec              ProfileSpec: plain data, reads nothing
   builder           user input → spec (a file hashed) and spec → Profile: the one builder

@@ -125,7 +125,19 @@ def _window_rt(z: np.ndarray, run: np.ndarray, pos: np.ndarray, run_len: np.ndar
     return float(np.sum(rt[ok])), int(np.count_nonzero(ok))
 
 
-def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, where: str) -> _Axis:
+def _level_runs(run: np.ndarray, x: np.ndarray, z: np.ndarray, nr: np.ndarray) -> np.ndarray:
+    """z less each run's own least-squares line (x centred per run: no cancellation)."""
+    R = nr.size
+    cnt = nr.astype(float)
+    xm = np.bincount(run, x, R) / cnt
+    zm = np.bincount(run, z, R) / cnt
+    xc = x - xm[run]
+    b = np.bincount(run, xc * (z - zm[run]), R) / np.bincount(run, xc * xc, R)
+    return z - zm[run] - b[run] * xc
+
+
+def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, where: str,
+                  level: bool = True) -> _Axis:
     n_lines, n = Z.shape
     if n < 2:
         raise InputError("the scan has fewer than 2 points along the axis", where=where, fix="choose the other axis")
@@ -149,13 +161,8 @@ def _prepare_axis(s: np.ndarray, Z: np.ndarray, d50: float, dx: float | None, wh
     pos = np.arange(run.size) - first[run]
     z = Z[line[run], start[run] + pos]
     x = pos * h
-    # level each run by its own least-squares line (centred x: no cancellation)
-    cnt = nr.astype(float)
-    xm = np.bincount(run, x, R) / cnt
-    zm = np.bincount(run, z, R) / cnt
-    xc = x - xm[run]
-    b = np.bincount(run, xc * (z - zm[run]), R) / np.bincount(run, xc * xc, R)
-    z = z - zm[run] - b[run] * xc
+    if level:               # each run levelled by its own least-squares line
+        z = _level_runs(run, x, z, nr)
     # mean asperity slope on the data segments (linear resampling keeps every face's slope)
     seg = pos < nr[run] - 1
     dz = np.diff(z)[seg[:-1]]
@@ -258,15 +265,16 @@ def _result(ax: _Axis, direction: str, filt: int, d50: float) -> ArealThetaA:
 
 
 def theta_a_lines(s: np.ndarray, Z: np.ndarray, d50: float, filters=FILTERS, dx: float | None = None,
-                  where: str = "scan") -> dict[str, dict[int, ArealThetaA]]:
+                  where: str = "scan", level: bool = True) -> dict[str, dict[int, ArealThetaA]]:
     """{"+": {filter: …}, "-": {…}} for the lines Z (n_lines, n_points) [m] at positions s [m]:
-    "+" the soil moving toward +s, "-" toward −s (the lines mirrored)."""
+    "+" the soil moving toward +s, "-" toward −s (the lines mirrored). `level` False keeps the lines'
+    heights as given (a periodic surface's lines, which levelling would tilt: surface.patch)."""
     if not (isinstance(d50, (int, float)) and math.isfinite(d50) and d50 > 0):
         raise InputError(f"D50 must be a positive length, got {d50!r}", where="--d50")
     for filt in filters:
         if filt not in FILTERS:
             raise InputError(f"unknown filter {filt!r}", where="--filter", fix="use 92 or 90")
-    ax = _prepare_axis(np.asarray(s, float), np.atleast_2d(np.asarray(Z, float)), d50, dx, where)
+    ax = _prepare_axis(np.asarray(s, float), np.atleast_2d(np.asarray(Z, float)), d50, dx, where, level)
     return {sign: {f: _result(ax, sign + "s", f, d50) for f in filters} for sign in "+-"}
 
 

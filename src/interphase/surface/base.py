@@ -16,6 +16,12 @@ from interphase.errors import InputError
 AXES = ("x", "y")
 #: the sense of shear along a line: "+" as measured, "-" mirrored
 DIRECTIONS = ("+", "-")
+#: the direction of shear over an areal scan (the soil's motion relative to the surface, in the
+#: scan's own frame); the 3D cell's patch is turned so that it shears along the cell's +x
+AREAL_DIRECTIONS = ("+x", "-x", "+y", "-y")
+#: the rule surface/patch.py cuts and closes an areal scan's patch by: part of the identity of every
+#: areal case (a new rule is a new name, so no case id outlives the surface it named)
+AREAL_PATCH_RULE = "edge-match/lsq-slopes"
 
 
 @dataclass(frozen=True, eq=False)

@@ -4,11 +4,13 @@
 it checks the file, hashes it (the SHA-256 is the spec's identity, not the path) and, with a line
 chosen by axis/line, reads the scan now, so that a line outside the scan or a file no reader takes
 is refused when the campaign is loaded, not when a case runs. `from_spec` builds the Profile a spec
-refers to; `periodic_cell` the surface of the periodic device.
+refers to; `periodic_cell` the surface of the periodic device; `areal_patch` an areal scan's closed
+patch, the 3D cell's surface (surface/patch.py), meshed at the grains' contact scale or coarser.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 from pathlib import Path
@@ -19,6 +21,8 @@ from interphase.errors import InputError
 from interphase.surface.base import Profile
 from interphase.surface.filters import gaussian_filter, prepare_measured
 from interphase.surface.lines import line_profile, parse_line, scan_profile
+from interphase.surface.mesh import min_angle_deg
+from interphase.surface.patch import Patch, make_patch
 from interphase.surface.profiles import (asymmetric_sawtooth, close, flat, random_profile, sawtooth, selfaffine_profile,
                                          tile)
 from interphase.surface.readers import read_scan
@@ -75,9 +79,10 @@ def file_sha256(path: str | Path) -> str:
 
 
 def file_spec(path: str | Path, units: str | None = "m", cutoff: float | None = None, where: str = "profile",
-              axis: str | None = None, line: int | str | None = None, direction: str = "+") -> ProfileSpec:
+              axis: str | None = None, line: int | str | None = None, direction: str = "+", areal: bool = False,
+              window: tuple[float, float] | None = None) -> ProfileSpec:
     """The spec of a measured profile file, its SHA-256 taken now; with axis/line the scan is read
-    now and the line checked against it."""
+    now and the line checked against it; an areal patch's scan is read now and must be areal."""
     p = Path(path)
     if not p.is_file():
         raise InputError(f"profile file {str(p)!r} does not exist", where=f"{where}.path",
@@ -85,7 +90,14 @@ def file_spec(path: str | Path, units: str | None = "m", cutoff: float | None = 
     if isinstance(line, float) and line.is_integer():
         line = int(line)
     spec = ProfileSpec(kind="file", path=str(p), units=units, sha256=file_sha256(p), cutoff=cutoff, where=where,
-                       axis=axis, line=line, direction=direction)
+                       axis=axis, line=line, direction=direction, areal=areal,
+                       window=tuple(window) if isinstance(window, list) else window)
+    if spec.areal:
+        scan = read_scan(p, units)
+        if not scan.areal:
+            raise InputError(f"{p} is a line, not an areal scan", where=f"{where}.areal",
+                             fix="remove areal = true (a line is sheared as a profile)")
+        return spec
     if axis is not None or line is not None:
         _, Z = read_scan(p, units).lines(axis or "x")
         if line is not None:
@@ -97,6 +109,9 @@ def from_spec(spec: ProfileSpec, d50: float, length: float, wall_width: float | 
     """The Profile a Case refers to, starting at x = 0 and covering at least `length` m; a measured
     line sampled finer than a device meshes is resampled to the grains' contact scale (`_meshable`;
     `wall_width` [m] is the extent its surface is extruded over, None where it is not)."""
+    if spec.areal:
+        raise InputError("an areal scan's patch is the surface of the 3D cell, not a profile", where=spec.where,
+                         fix='use device = "periodic3d" (or remove areal = true to shear a line of the scan)')
     if spec.kind == "flat":
         return flat(length)
     if spec.kind == "sawtooth":
@@ -147,3 +162,21 @@ def periodic_cell(spec: ProfileSpec, d50: float, length: float, wall_width: floa
         return sawtooth(spec.param("rt"), spec.param("sw"), spec.param("sr"), d50=d50,
                         periods=max(1, round(length / lam)))
     return close(from_spec(spec, d50, 2 * length, wall_width), length, min_face=min_face(d50, wall_width))
+
+
+@functools.lru_cache(maxsize=16)
+def areal_patch(spec: ProfileSpec, d50: float, length: float, depth: float) -> Patch:
+    """The closed patch of an areal file spec for a 3D cell of about `length` × `depth` [m]
+    (surface.patch.make_patch; cached: every Case of a campaign's seeds shares one): its window and
+    direction as the spec gives them, meshed no finer than mesh_step(d50) (CONTACT_STEP_D50·D50:
+    the FRT scans' 24 µm grid under the Karlsruhe sand's 0.14 mm grains, 0.17 D50, stays as measured;
+    a finer scan is resampled up to it). Refused when a mesh triangle has an angle under
+    LIGGGHTS_MIN_ANGLE_DEG (the engine would refuse the mesh)."""
+    scan = read_scan(spec.path, units=spec.units)
+    patch = make_patch(scan, d50, length, depth, spec.direction, spec.window, min_step=mesh_step(d50))
+    angle = min_angle_deg(*patch.triangles())
+    if angle < LIGGGHTS_MIN_ANGLE_DEG:
+        raise InputError(f"the patch's mesh has a triangle with an angle of {angle:.3g}° (LIGGGHTS takes ≥ "
+                         f"{LIGGGHTS_MIN_ANGLE_DEG}°)", where=spec.where,
+                         fix="another window or direction, or a larger D50 (a coarser mesh)")
+    return patch

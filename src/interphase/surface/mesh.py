@@ -1,9 +1,9 @@
 """Surfaces as triangles and ASCII STL (meshio) for the engines.
 
 An extruded profile: each segment (x0, z0)→(x1, z1) becomes the rectangle y ∈ [y_min, y_max], split
-into two triangles. An areal surface z(x, y) = p(x) + q(y) (`separable_triangles`): two triangles
-per cell of the grid of both profiles' vertices. Every triangle is wound so that its normal points
-up (+z, into the soil).
+into two triangles. An areal surface on a grid (`grid_triangles`: a scan's patch, surface/patch.py;
+z(x, y) = p(x) + q(y) on the grid of both profiles' vertices, `separable_triangles`): two triangles
+per grid cell. Every triangle is wound so that its normal points up (+z, into the soil).
 """
 
 from __future__ import annotations
@@ -35,15 +35,32 @@ def separable_triangles(along: Profile, across: Profile, y0: float) -> tuple[np.
     vertices (`across.x` are its y coordinates, shifted by y0): (points (N·M, 3), triangles
     (2(N−1)(M−1), 3) int). Both profiles are piecewise linear with kinks only at their vertices, so
     within a grid cell z = a + b·x + c·y is a plane: the two triangles are the surface exactly."""
-    x, y = along.x, across.x + y0
+    return grid_triangles(along.x, across.x + y0, along.z[:, None] + across.z[None, :])
+
+
+def grid_triangles(x: np.ndarray, y: np.ndarray, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Heights Z (N, M) [m] on the grid x (N,) × y (M,) [m] as triangles: (points (N·M, 3), triangles
+    (2(N−1)(M−1), 3) int), vertex (i, j) at row i·M + j. Each grid cell is split along its diagonal
+    from (i, j) to (i+1, j+1): (i,j), (i+1,j), (i+1,j+1) and (i,j), (i+1,j+1), (i,j+1), both
+    counter-clockwise seen from +z, so every normal points up whatever the heights."""
+    x, y, Z = np.asarray(x, float), np.asarray(y, float), np.asarray(Z, float)
     n, m = x.size, y.size
     X, Y = np.meshgrid(x, y, indexing="ij")
-    Z = along.z[:, None] + across.z[None, :]
     points = np.column_stack([X.ravel(), Y.ravel(), Z.ravel()])
     k = (np.arange(n - 1)[:, None] * m + np.arange(m - 1)[None, :]).ravel()   # vertex (i, j) of each cell
-    # (i,j), (i+1,j), (i+1,j+1) and (i,j), (i+1,j+1), (i,j+1): counter-clockwise seen from +z
     tri = np.vstack([np.column_stack([k, k + m, k + m + 1]), np.column_stack([k, k + m + 1, k + 1])])
     return points, tri
+
+
+def min_angle_deg(points: np.ndarray, triangles: np.ndarray) -> float:
+    """The smallest interior angle of any triangle [°] (what LIGGGHTS' mesh check reads)."""
+    p = [points[triangles[:, k]] for k in range(3)]
+    out = np.inf
+    for k in range(3):      # the angle at vertex k, between its two edges
+        u, v = p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]
+        cos = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+        out = min(out, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).min()))
+    return out
 
 
 def stl_mesh(profile: Profile, y_min: float, y_max: float) -> meshio.Mesh:
