@@ -5,7 +5,8 @@ tables the Karlsruhe cards' answers read ([criterion] strength), and E against s
 
 Reads each set's committed summaries.csv and curves.parquet (results/<set>/, written by `campaign
 pack` of the study's runs folders) beside the criterion campaigns' own (studies/kfs_group1_3d/, kfs_group1_2d/),
-and writes results/strength_3d.csv, results/strength_2d.csv and results/e_2d.csv. --check re-derives
+and writes results/strength_3d.csv, results/strength_2d.csv (the states on at least TABLE_SEEDS seeds),
+results/soil_tests_3d.csv (every 3D state, whatever its seeds) and results/e_2d.csv. --check re-derives
 them and fails if a committed one differs.
 """
 
@@ -33,14 +34,25 @@ def _sets(dim: str):
                    CommittedCurves(folder / "curves.parquet"))
 
 
-def strength(dim: str) -> pd.DataFrame:
-    """One row per (stress, preparation) soil test; a state measured in both sets is read from the
-    one with more seeds (the study restores the criterion campaign's runs of the same id)."""
+#: seeds a soil-test state needs before the card's strength table (which the answer reads) holds it: a
+#: state on fewer has no interval worth the name, and the answer is refused there rather than read off one run
+TABLE_SEEDS = 3
+
+
+def soil_tests(dim: str) -> pd.DataFrame:
+    """One row per (stress, preparation) soil test, whatever its seeds; a state measured in both sets is
+    read from the one with more seeds (the study restores the criterion campaign's runs of the same id)."""
     rows = pd.concat([box_ensembles(s, c) for s, c in _sets(dim)], ignore_index=True)
     rows = rows.sort_values("seeds").drop_duplicates(["normal_stress", "preparation"], keep="last")
     cols = ["normal_stress", "preparation", "tan_phi", "tan_phi_lo", "tan_phi_hi", "seeds", "tan_phi_cs",
             "tan_phi_cs_lo", "tan_phi_cs_hi"]
     return rows.sort_values(["preparation", "normal_stress"])[cols].round(6).reset_index(drop=True)
+
+
+def strength(dim: str) -> pd.DataFrame:
+    """The card's strength table: the states with at least TABLE_SEEDS seeds."""
+    rows = soil_tests(dim)
+    return rows[rows["seeds"] >= TABLE_SEEDS].reset_index(drop=True)
 
 
 def e_table() -> pd.DataFrame:
@@ -60,7 +72,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="fail if a committed table differs from its re-derivation")
     args = ap.parse_args(argv)
-    tables = {"strength_3d.csv": strength("3d"), "strength_2d.csv": strength("2d"), "e_2d.csv": e_table()}
+    tables = {"strength_3d.csv": strength("3d"), "soil_tests_3d.csv": soil_tests("3d"), "strength_2d.csv": strength("2d"),
+              "e_2d.csv": e_table()}
     bad = []
     for name, df in tables.items():
         path = HERE / "results" / name
