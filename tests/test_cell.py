@@ -528,3 +528,22 @@ def test_a_cards_checks_print_as_one_row_per_record_the_fitted_one_first():
     assert len(table) == 2 + 1 + len(card["verification"]) and table[2].startswith("| TMD17 (fitted) |")
     tmd13 = next(v for v in card["verification"] if v["record"] == "TMD13.dat")
     assert f" / {tmd13['measured']['phi_peak_deg']:.1f} (" in next(r for r in table if r.startswith("| TMD13 |"))
+
+
+def test_a_density_the_preparation_cannot_make_is_said_so():
+    """An element test asked for a Dr beyond the preparation's loosest packing (the 3D Karlsruhe card at
+    Dr 0.2 makes Dr 0.34 at 100 kPa) carries a note naming both, and one within the records' tolerance
+    none."""
+    import dataclasses
+    import math
+
+    from interphase.analysis.cell_ensemble import CellResult
+    from interphase.campaign.cell import _unreached
+
+    fields = {f.name: math.nan for f in dataclasses.fields(CellResult)}
+    base = CellResult(**(fields | dict(test="triaxial", confining_stress=100e3, n_seeds=3, relative_density=0.343,
+                                       preparation=1.0, note="")))
+    loose = _unreached(base, 0.2)
+    assert "asked Dr 0.20, made Dr 0.34" in loose.note and "loosest" in loose.note
+    assert _unreached(base, 0.32).note == "" and _unreached(base, None).note == ""
+    assert "densest" in _unreached(dataclasses.replace(base, relative_density=0.9), 0.99).note

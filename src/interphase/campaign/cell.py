@@ -69,5 +69,27 @@ def run_cell(card: SoilCard, confining_stresses, seeds, *, test: str | None = No
                           description=f"{test} test of the soil card {card.path}")
     planned, series, summ = run_cases(path, executor=executor, jobs=jobs, stream=stream,
                                            rerun_failed=rerun_failed, columns=CELL_SERIES)
-    return [cell_of(cases, series, summ, e_limits=mapped[s][1])
-            for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
+    results = [cell_of(cases, series, summ, e_limits=mapped[s][1])
+               for s in stresses for cases in [[p for p in planned if p.case.normal_stress == s]]]
+    return [_unreached(r, relative_density if mapped[r.confining_stress][0] is not None else None) for r in results]
+
+
+#: a specimen further than this from the asked relative density was not made at it (the records' own
+#: tolerance on Dr, campaign.cell_records)
+DR_TOLERANCE = 0.05
+
+
+def _unreached(result, asked: float | None):
+    """The result with a note where the preparation could not make the asked relative density (the
+    map's bound: its loosest or densest packing at that stress), so that a result is never read at a
+    density it does not have."""
+    import dataclasses
+    import math
+
+    made = result.relative_density
+    if asked is None or not math.isfinite(made) or abs(made - asked) <= DR_TOLERANCE:
+        return result
+    side = "loosest" if made > asked else "densest"
+    note = (f"asked Dr {asked:.2f}, made Dr {made:.2f}: preparation {result.preparation:g} is the {side} packing "
+            f"this cell's preparation makes at {result.confining_stress / 1e3:g} kPa")
+    return dataclasses.replace(result, note="; ".join(x for x in (note, result.note) if x))
