@@ -33,7 +33,7 @@ import pandas as pd
 from interphase.analysis.ensemble import ratio_interval, t_interval
 from interphase.analysis.ensemble_table import ensemble_table
 from interphase.campaign.compare import compare_cells, seed_values
-from interphase.campaign.results import read_committed, write_or_check
+from interphase.campaign.results import read_committed, settle_tables
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -119,13 +119,7 @@ def main(argv=None) -> int:
         c = out[RESULTS / "compare_cells.csv"]
         print(c[["variant", "case", "metric", "change", "change_lo", "change_hi", "verdict", "seeds_needed"]]
               .to_string(index=False))
-    changed = write_or_check(out, args.check)
-    if args.check and changed:
-        print(f"differs from the committed table: {', '.join(p.name for p in changed)}", file=sys.stderr)
-        return 1
-    for p in ([] if args.check else changed):
-        print(f"wrote {p.relative_to(HERE)}")
-    return 0
+    return settle_tables(out, args.check, HERE)
 
 
 if __name__ == "__main__":

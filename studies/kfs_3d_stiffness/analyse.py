@@ -28,7 +28,7 @@ import pandas as pd
 from interphase.analysis.ensemble_table import ensemble_table
 from interphase.analysis.soil_test import soil_test_readings
 from interphase.campaign.compare import compare, seed_values
-from interphase.campaign.results import read_committed, write_or_check
+from interphase.campaign.results import read_committed, settle_tables
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -72,14 +72,7 @@ def main(argv=None) -> int:
                 df = df[["case", "metric", "ref", "value", "change", "change_lo", "change_hi", "verdict", "n_ref",
                          "n_value", "seeds_needed"]]
             print(f"{path.name}:\n{df.to_string(index=False)}\n")
-    changed = write_or_check(out, args.check)
-    if args.check and changed:
-        print(f"differs from the committed table: {', '.join(str(p.relative_to(HERE)) for p in changed)}",
-              file=sys.stderr)
-        return 1
-    for p in ([] if args.check else changed):
-        print(f"wrote {p.relative_to(HERE)}")
-    return 0
+    return settle_tables(out, args.check, HERE)
 
 
 if __name__ == "__main__":

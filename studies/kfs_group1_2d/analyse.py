@@ -28,7 +28,7 @@ import pandas as pd
 from interphase.analysis.ensemble_table import ensemble_table
 from interphase.analysis.group1 import plateau, saturation, tooth_cases
 from interphase.analysis.soil_test import soil_test_readings
-from interphase.campaign.results import read_committed, write_or_check
+from interphase.campaign.results import read_committed, settle_tables
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -61,13 +61,7 @@ def main(argv=None) -> int:
         v = pd.read_csv(BIAXIAL).iloc[0]
         print(f"the same discs' biaxial φ_peak ({v['record']}, {int(v['n_seeds'])} seeds): "
               f"{v['phi_peak_deg']:.1f}° ({v['phi_peak_deg_lo']:.1f}–{v['phi_peak_deg_hi']:.1f}°)")
-    changed = write_or_check(out, args.check)
-    if args.check and changed:
-        print(f"differs from the committed table: {', '.join(p.name for p in changed)}", file=sys.stderr)
-        return 1
-    for p in ([] if args.check else changed):
-        print(f"wrote {p.relative_to(HERE)}")
-    return 0
+    return settle_tables(out, args.check, HERE)
 
 
 if __name__ == "__main__":

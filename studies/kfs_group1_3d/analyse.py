@@ -35,7 +35,7 @@ from interphase.analysis.ensemble_table import ensemble_table
 from interphase.analysis.group1 import SATURATED_RT, plateau, rule_efficiency, saturation, tooth_cases
 from interphase.analysis.soil_test import soil_test_readings
 from interphase.campaign.compare import seed_values
-from interphase.campaign.results import read_committed, write_or_check
+from interphase.campaign.results import read_committed, settle_tables
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -201,13 +201,7 @@ def main(argv=None) -> int:
                 print(f"{path.name}:\n{df.to_string(index=False)}\n")
     if args.figure and not args.check:
         figure({"quasi-2D": d2, "3D": d3}, RESULTS / "3d_vs_2d.png")
-    changed = write_or_check(out, args.check)
-    if args.check and changed:
-        print(f"differs from the committed table: {', '.join(p.name for p in changed)}", file=sys.stderr)
-        return 1
-    for p in ([] if args.check else changed):
-        print(f"wrote {p.relative_to(HERE)}")
-    return 0
+    return settle_tables(out, args.check, HERE)
 
 
 if __name__ == "__main__":

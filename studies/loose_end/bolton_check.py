@@ -24,6 +24,7 @@ import pandas as pd
 
 import interphase as ip
 from interphase.analysis.bolton import triaxial
+from interphase.campaign.results import settle_tables
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -95,23 +96,11 @@ def main(argv=None) -> int:
     t = records_table()
     s = summary(t)
     res = HERE / "results"
-    if a.check:
-        bad = []
-        for name, df in (("bolton_records.csv", t), ("bolton_summary.csv", s)):
-            old = pd.read_csv(res / name)
-            try:
-                pd.testing.assert_frame_equal(old, df, check_dtype=False, atol=1e-6)
-            except AssertionError as exc:
-                bad.append(f"{name}: {exc}")
-        print("\n".join(bad) or "the committed tables follow from the records and the card")
-        return 1 if bad else 0
-    res.mkdir(exist_ok=True)
-    t.to_csv(res / "bolton_records.csv", index=False)
-    s.to_csv(res / "bolton_summary.csv", index=False)
-    if a.figure:
+    if a.figure and not a.check:
+        res.mkdir(exist_ok=True)
         figure(t, res / "bolton_records.png")
     print(s.to_string(index=False))
-    return 0
+    return settle_tables({res / "bolton_records.csv": t, res / "bolton_summary.csv": s}, a.check, HERE)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from pathlib import Path
 import pandas as pd
 
 from interphase.analysis.ensemble_table import box_ensembles, ensemble_table
-from interphase.campaign.results import CommittedCurves
+from interphase.campaign.results import read_committed
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -30,8 +30,7 @@ STUDY_RUNS = {"3d": HERE / "results" / "soil_3d", "2d": HERE / "results" / "e_2d
 def _sets(dim: str):
     for folder in (CARD_RUNS[dim], STUDY_RUNS[dim]):
         if (folder / "summaries.csv").exists():
-            yield (pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str}),
-                   CommittedCurves(folder / "curves.parquet"))
+            yield read_committed(folder)
 
 
 #: seeds a soil-test state needs before the card's strength table (which the answer reads) holds it: a
@@ -60,8 +59,8 @@ def e_table() -> pd.DataFrame:
     folder = STUDY_RUNS["2d"]
     if not (folder / "summaries.csv").exists():
         return pd.DataFrame()
-    summ = pd.read_csv(folder / "summaries.csv", dtype={"case_id": str, "physical_id": str, "pair_id": str})
-    ens = ensemble_table(summ, CommittedCurves(folder / "curves.parquet"))
+    summ, curves = read_committed(folder)
+    ens = ensemble_table(summ, curves)
     state = summ.drop_duplicates("physical_id").set_index("physical_id")[["normal_stress", "preparation", "rt"]]
     cols = ["rt", "normal_stress", "preparation", "seeds", "box_seeds", "tan_delta", "tan_delta_lo", "tan_delta_hi",
             "tan_phi", "tan_phi_lo", "tan_phi_hi", "E", "E_lo", "E_hi", "theta_r_deg"]

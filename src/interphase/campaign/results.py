@@ -155,6 +155,22 @@ def write_or_check(tables: dict, check: bool) -> list[Path]:
     return out
 
 
+def settle_tables(tables: dict, check: bool, root: str | Path) -> int:
+    """A study script's last step: `write_or_check` its tables, say which differ (check) or were written
+    (paths relative to `root`, the study's folder), and return the exit code (1: a committed table
+    differs from its re-derivation)."""
+    import sys
+
+    changed = write_or_check(tables, check)
+    names = [str(p.relative_to(root)) for p in changed]
+    if check and changed:
+        print(f"differs from the committed table: {', '.join(names)}", file=sys.stderr)
+        return 1
+    for n in ([] if check else names):
+        print(f"wrote {n}")
+    return 0
+
+
 def open_campaign(campaign_path: str | Path, output: str | Path | None = None, engines=None):
     """(Campaign, CampaignStore, summaries) of a campaign file whose cases have run (`output`: its
     runs' folder when not where the file says, as `campaign run --output` wrote them; `engines`: the
