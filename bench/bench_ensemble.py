@@ -18,7 +18,7 @@ from interphase.analysis.ensemble_table import ensemble_table
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_analysis import best  # noqa: E402
-from sequential_coverage import _Curves  # noqa: E402
+from interphase.campaign.results import CommittedCurves as _Curves
 
 STUDY = Path(__file__).resolve().parents[1] / "docs" / "reproduction" / "precision" / "study"
 

@@ -25,13 +25,11 @@ Dividing y by a constant does not move c. A measurement: exit 0 whatever it find
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_coverage import _Curves  # noqa: E402
+from interphase.campaign.results import CommittedCurves as _Curves
 
 from interphase.analysis.correlations import fit_plateau  # noqa: E402
 from interphase.analysis.ensemble_table import ensemble_tables  # noqa: E402

@@ -16,13 +16,11 @@ maximum (docs/reproduction.md and docs/convergence.md say so where they are quot
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_coverage import _Curves  # noqa: E402
+from interphase.campaign.results import CommittedCurves as _Curves
 
 from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
 

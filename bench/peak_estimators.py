@@ -45,15 +45,13 @@ from __future__ import annotations
 import argparse
 import math
 import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_coverage import _Curves  # noqa: E402
+from interphase.campaign.results import CommittedCurves as _Curves
 
 from interphase.analysis.ensemble import _grid, _on_grid, peak_values, ratio_interval, values_interval  # noqa: E402
 from interphase.analysis.strength import PEAK_WINDOW_D50, moving_average  # noqa: E402
