@@ -12,6 +12,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from interphase.analysis.anisotropy import (
+    SLIDE_FRACTION, sliding_share,
     apply_shear_sign, binned_method, qp_sff, region_anisotropy, resultant_direction, surface_anisotropy,
     tensor_method,
 )
@@ -273,6 +274,25 @@ def test_lee_share_lowers_the_summed_angle_not_theta_r():
     # no usable force: NaN, like θr
     zero = c.assign(fx=0.0, fz=0.0, fn=0.0)
     assert math.isnan(surface_anisotropy(zero).iloc[0]["lee_share"])
+
+
+def test_sliding_share_counts_contacts_at_the_coulomb_limit():
+    """μ 0.2: contacts at |ft|/fn 0.2 and 0.199 (≥ 0.99 μ) slide, 0.19 and 0 stick, either sign of ft;
+    an unloaded contact (fn 0) counts in neither; a grain–grain contact is not the surface's. Per
+    snapshot; a snapshot without a loaded surface contact reads NaN, as does μ 0."""
+    fn = np.array([1.0, 2.0, 1.0, 1.0, 0.0])
+    ft = np.array([0.2, -0.398, 0.19, 0.0, 0.0])
+    a = contacts_table(np.zeros(5), np.ones(5), fn, ft, kind="ps", snapshot=3)
+    b = contacts_table(np.zeros(2), np.ones(2), [1.0, 1.0], [0.5, 0.5], kind="pp", snapshot=3)
+    empty = contacts_table(np.zeros(1), np.ones(1), [0.0], [0.0], kind="ps", snapshot=7)
+    share = sliding_share(pd.concat([a, b, empty], ignore_index=True), 0.2)
+    assert share.loc[3] == pytest.approx(2 / 4, abs=1e-12) and math.isnan(share.loc[7])
+    assert 0.199 >= SLIDE_FRACTION * 0.2 > 0.19
+    assert sliding_share(a, 0.2, snapshots=[3]).iloc[0] == pytest.approx(0.5)
+    assert math.isnan(sliding_share(a, 0.0).iloc[0])
+    # a 3D table: the whole tangential part counts, not only its in-plane component
+    a3 = a.assign(cy=0.0, ny=0.0, fy=[0.0, 0.0, 0.1, 0.0, 0.0], y1=0.0, y2=0.0)
+    assert sliding_share(a3, 0.2).iloc[0] == pytest.approx(3 / 4, abs=1e-12)
 
 
 @settings(max_examples=30, deadline=None)

@@ -505,6 +505,33 @@ def _lee_share(c: pd.DataFrame, snap, keys, undefined, mag=None) -> np.ndarray:
     return np.where(undefined, np.nan, share)
 
 
+#: a surface contact slides when its tangential force reaches this share of μs·fn (a sticking contact
+#: sits below; the dumped force at a sliding one can exceed μs·fn a little by its damping part)
+SLIDE_FRACTION = 0.99
+
+
+def sliding_share(contacts: pd.DataFrame, friction: float, snapshots=None) -> pd.Series:
+    """Per snapshot (all of the table's, or `snapshots`), the share of loaded 'ps' contacts (fn > 0)
+    that slide: |f_t| ≥ SLIDE_FRACTION · `friction` · fn, f_t the tangential force, in 3D the whole
+    tangential part sqrt(|f|² − fn²) (the table's ft is its in-plane component). NaN where a snapshot
+    has no loaded surface contact or the friction is not positive."""
+    keys = _snapshot_keys(contacts, snapshots)
+    c = contacts[contacts["kind"].eq("ps").to_numpy() & contacts["snapshot"].isin(keys).to_numpy()]
+    fn = np.abs(c["fn"].to_numpy(float))
+    if "fy" in c.columns and "ny" in c.columns:
+        f2 = c["fx"].to_numpy(float) ** 2 + c["fy"].to_numpy(float) ** 2 + c["fz"].to_numpy(float) ** 2
+        ft = np.sqrt(np.clip(f2 - fn ** 2, 0.0, None))
+    else:
+        ft = np.abs(c["ft"].to_numpy(float))
+    loaded = np.isfinite(fn) & np.isfinite(ft) & (fn > 0)
+    keys, inv = _grouping(fn.size, c["snapshot"].to_numpy(), keys)
+    n = _gsum(inv, keys.size, loaded.astype(float))
+    slide = _gsum(inv, keys.size, (loaded & (ft >= SLIDE_FRACTION * friction * fn)).astype(float))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where((n > 0) & (friction > 0), slide / n, np.nan)
+    return pd.Series(share, index=pd.Index(keys, name="snapshot"), name="slide_share")
+
+
 def in_rectangle(x, z, rect) -> np.ndarray:
     """Mask of points inside rect = (x0, x1, z0, z1) [m], boundaries included."""
     x0, x1, z0, z1 = rect

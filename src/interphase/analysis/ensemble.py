@@ -164,7 +164,7 @@ QUANTITY_RANGE = {
     "theta_r_region_deg": (-90.0, 90.0), "theta_n_region_deg": (-90.0, 90.0),
     "theta_a_deg_92": (0.0, 90.0), "theta_a_deg_90": (0.0, 90.0), "theta_a_ccw_deg_90": (0.0, 180.0),
     "friction_angle_deg": (0.0, 90.0),
-    "lee_share_surface": (0.0, 1.0), "shear_disp_at_peak": (0.0, math.inf), "dilation_at_peak": (-math.inf, math.inf),
+    "lee_share_surface": (0.0, 1.0), "slide_share_surface": (0.0, 1.0), "shear_disp_at_peak": (0.0, math.inf), "dilation_at_peak": (-math.inf, math.inf),
 }
 
 

@@ -12,7 +12,9 @@ NaN among them. Others read these row keys (values JSON-able; NaN written as nul
   theta_r_surface_deg, theta_n_surface_deg (ψ, deg from vertical, + toward −x), theta_r_surface_mean_deg
   (θr averaged over the snapshots where the surface carries its load), a_r_surface,
   a_n_surface, surface_force_angle_deg, lee_share_surface (share of the surface contact force on
-  faces leaning with the shear, which pulls δ below θr), stress_ratio_surface_contacts, n_contacts_surface,
+  faces leaning with the shear, which pulls δ below θr), slide_share_surface (share of the loaded surface
+  contacts whose tangential force reaches 0.99 μs·fn: sliding, not sticking), stress_ratio_surface_contacts,
+  n_contacts_surface,
   theta_r_region_deg, theta_n_region_deg, theta_t_region_deg, theta_fabric_region_deg, a_region,
   an_region, at_region, f0_region [N], stress_ratio_region (−σxz/σzz), qp_region, qp_sff,
   principal_stress_deg_region, n_contacts_region, region_x0/x1/z0/z1 [m], shear_band_d50,
@@ -61,7 +63,7 @@ ROW_KEYS = (
     "test", "peak_stress_ratio", "shear_disp_at_peak", "peak_at_end", "residual_stress_ratio", "dilation_at_peak",
     "peak_snapshot", "theta_r_surface_deg", "theta_r_surface_mean_deg", "theta_n_surface_deg", "a_r_surface",
     "a_n_surface",
-    "surface_force_angle_deg", "lee_share_surface", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
+    "surface_force_angle_deg", "lee_share_surface", "slide_share_surface", "theta_r_region_deg", "theta_n_region_deg", "a_region", "an_region",
     "at_region", "stress_ratio_region", "qp_region", "qp_sff", "principal_stress_deg_region",
     "shear_band_d50", "inertial_number", "theta_a_deg_92", "theta_a_deg_90", "rn", "rnc",
     "mean_slope_deg", "n_contacts_surface", "solid_fraction", "reasons",

@@ -161,19 +161,22 @@ def in_window(contacts: pd.DataFrame, x0: float, x1: float) -> pd.DataFrame:
 
 
 def surface(case, contacts: pd.DataFrame, ps: PeakSnapshot) -> Surface:
-    """θr, θn, a_r, a_n, the summed-force angle, the lee share and the contacts' stress ratio of the
-    surface contacts of the measuring window at the peak snapshot."""
+    """θr, θn, a_r, a_n, the summed-force angle, the lee share, the sliding share and the contacts'
+    stress ratio of the surface contacts of the measuring window at the peak snapshot."""
     if case.test != "interface":
-        values = {k: math.nan for k in SURFACE_KEYS} | {"n_contacts_surface": 0}
-        return Surface(values=values, reasons={k: "box test: no rough surface" for k in SURFACE_KEYS})
+        values = {k: math.nan for k in SURFACE_KEYS} | {"n_contacts_surface": 0, "slide_share_surface": math.nan}
+        return Surface(values=values, reasons={k: "box test: no rough surface" for k in (*SURFACE_KEYS, "slide_share_surface")})
     table = an_.surface_anisotropy(in_window(contacts, *case.window), snapshots=ps.snaps.index.to_numpy())
     key = ps.key
     values = {k: _at(table, key, col) for k, col in SURFACE_KEYS.items()}
     values["n_contacts_surface"] = int(_at(table, key, "n_contacts")) if key is not None else 0
+    slide = an_.sliding_share(in_window(contacts, *case.window), case.friction_ps, snapshots=[key] if key is not None else [])
+    values["slide_share_surface"] = float(slide.iloc[0]) if key is not None and len(slide) else math.nan
     if getattr(case, "three_d", False):     # the out-of-plane part of the 3D tensors (docs/3d.md)
         values |= {k: _at(table, key, col) for k, col in SURFACE_3D_KEYS.items()}
     why = _at(table, key, "reason") if key is not None else ps.why_none
-    return Surface(values=values, reasons=_nan_reasons(values, SURFACE_KEYS, why or "undefined at the peak snapshot"),
+    reasons = _nan_reasons(values, (*SURFACE_KEYS, "slide_share_surface"), why or "undefined at the peak snapshot")
+    return Surface(values=values, reasons=reasons,
                    table=table)
 
 
