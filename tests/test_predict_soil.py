@@ -150,6 +150,14 @@ def test_a_card_simulates_in_the_cell_its_criterion_stands_on(tmp_path, capsys):
     same = g1[g1["label"].isin(["box-periodic3d-box-mu0.9-user-prep0.387-s1",
                                 "interface-periodic3d-sawtooth-rt1-sr0-sw2-mu0.5-user-prep0.387-s1"])]
     assert len(same) == 2 and all(cid in out for cid in same["case_id"]), out
+    # so --simulate restores those soil tests from the fit's committed runs instead of running them
+    from interphase.campaign.restore import restorable_ids
+    from interphase.campaign.validate import _fit_runs
+
+    table = _fit_runs(card3)
+    assert table == ROOT / "studies" / "kfs_group1_3d" / "results" / "summaries.csv"
+    box = same.loc[same["label"].str.startswith("box-"), "case_id"].iloc[0]
+    assert box in restorable_ids(table) and _fit_runs(load_card(_card(tmp_path))) is None
 
 
 def test_the_api_answers_as_the_command(tmp_path, capsys):

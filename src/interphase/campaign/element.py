@@ -46,9 +46,10 @@ CELL_SERIES = ("eps1", "epsv", "e", "ratio")
 
 
 def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = None, stream=None,
-              rerun_failed: bool = False, columns=SHEAR_SERIES):
+              rerun_failed: bool = False, columns=SHEAR_SERIES, restore: Path | None = None):
     """Run a generated campaign file (its finished runs first restored from a pack when the command
-    restores from one: restore.restoring); returns (planned cases, {case_id: series DataFrame of
+    restores from one: restore.restoring; else from the summaries table `restore`, if given, whose
+    rows of planned case ids come back finished); returns (planned cases, {case_id: series DataFrame of
     `columns`}, summaries table of the finished ones). Failed cases are reported by the run and left
     out of the results (`failures` says why); `rerun_failed` runs them again."""
     from interphase.campaign.plan import plan
@@ -59,7 +60,7 @@ def run_cases(path: Path, *, executor: str | None = None, jobs: int | None = Non
 
     campaign = load_campaign(path)
     report = run_campaign(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, live=False,
-                          rerun_failed=rerun_failed, restore=packed_table(campaign.output))
+                          rerun_failed=rerun_failed, restore=packed_table(campaign.output) or restore)
     if report.interrupted:      # Ctrl-C, SIGTERM, a full disk: the command stops here, not only this campaign
         raise KeyboardInterrupt(report.stopped or "interrupted")
     planned = plan(campaign)

@@ -96,10 +96,17 @@ def _worker_init(events, ppid: int | None = None) -> None:
         threading.Thread(target=_watch_parent, args=(ppid,), name="watch-parent", daemon=True).start()
 
 
+def _absorb(signum, frame):
+    """A signal that arrives while an interruption is being recorded: nothing to do."""
+
+
 def _raise_interrupted(signum, frame):
-    # one interruption per case: further signals would cut the recording of this one short
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    # one interruption per case: further signals would cut the recording of this one short. They
+    # are absorbed by a Python handler, not SIG_IGN: one that reached C while this handler ran would
+    # find SIG_IGN when Python turns to it and CPython prints "Signal 15 ignored due to race
+    # condition" as a traceback into the user's progress
+    signal.signal(signal.SIGINT, _absorb)
+    signal.signal(signal.SIGTERM, _absorb)
     name = signal.Signals(signum).name
     raise Interrupted(f"{name}: {_STOP_REASON}" if _STOP_REASON else name)
 

@@ -24,6 +24,7 @@ decided from the index and printed before anything is touched), then its executi
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import sqlite3
@@ -306,14 +307,15 @@ def _run_round(campaign: Campaign, planned: list[PlannedCase], store: st.Campaig
             print(f"rerun corrupt {p.case_id} ({p.label}): {row.get('message')}", file=stream, flush=True)
             st.discard_corrupt(store.case_folder(p.case_id), row.get("cause"), row.get("message"))
     if sel.run:
-        _execute(campaign, sel.run, store, report, executor, jobs, stream, live)
+        _execute(campaign, sel.run, store, report, executor, jobs, stream, live, done=sel.done)
     return sel.run
 
 
 def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStore, report: RunReport,
-             executor: str, jobs, stream, live) -> None:
-    """Run `todo` on the executor, recording every start and finish in the index and `report`;
-    Ctrl-C, SIGTERM and a full disk stop it cleanly (report.interrupted)."""
+             executor: str, jobs, stream, live, done=()) -> None:
+    """Run `todo` on the executor, recording every start and finish in the index and `report`
+    (`done`: the finished runs that scale its time estimate); Ctrl-C, SIGTERM and a full disk stop it
+    cleanly (report.interrupted)."""
     tasks = [Task(p.case, p.engine_spec, store.case_folder(p.case_id), p.meta(campaign.name)) for p in todo]
     for p in todo:
         store.set_status(p.case_id, "queued")
@@ -325,7 +327,7 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
                            job_name=f"interphase-{campaign.name}",
                            time_limit=lambda case: time_limit_minutes(case, campaign.execution.time_factor,
                                                                       campaign.execution.time_limit))
-    progress = _progress(campaign, todo, store, min(slots, len(todo)), stream, live)
+    progress = _progress(campaign, todo, store, min(slots, len(todo)), stream, live, done)
 
     index_trouble: list[str] = []
 
@@ -487,11 +489,7 @@ def _dry_run(campaign: Campaign, planned, executor: str, stream, report: RunRepo
         left = action in ("run", "queued", "running") or action.startswith("rerun")   # what is left to run
         seconds += estimate_seconds(p.case) if left else 0.0
         if action == "skip (done)" and measured[0] < CALIBRATION_RUNS:
-            took = (st.read_json(folder / st.CASE_JSON) or {}).get("timings", {}).get("execute")
-            if isinstance(took, (int, float)) and took > 0:
-                measured[0] += 1
-                measured[1] += took
-                measured[2] += estimate_seconds(p.case)
+            _add_measured(measured, p, folder)
         if render and action == "run" and _start_status(p.case) == "done":
             if p.engine not in engines:
                 engines[p.engine] = p.engine_spec.build()
@@ -543,10 +541,25 @@ def _dry_action(cid: str, folder, indexed: dict, stale: dict, record: set, activ
 CALIBRATION_RUNS = 200
 
 
-def _progress(campaign: Campaign, todo: list, store, slots: int, stream, live) -> Progress:
+def _add_measured(measured: list, p: PlannedCase, folder: Path) -> None:
+    """Add a finished run to `measured` (count, engine seconds, their estimate): its engine time, or
+    for a restored run (no timings) the elapsed time its row brought."""
+    meta = st.read_json(folder / st.CASE_JSON) or {}
+    took = meta.get("timings", {}).get("execute") or meta.get("elapsed")
+    if isinstance(took, (int, float)) and math.isfinite(took) and took > 0:
+        measured[0] += 1
+        measured[1] += took
+        measured[2] += estimate_seconds(p.case)
+
+
+def _progress(campaign: Campaign, todo: list, store, slots: int, stream, live, done=()) -> Progress:
     """The run's progress display, each running case's engine stage read from its folder; the
-    time estimate printed before the first case starts."""
-    print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), slots), file=stream, flush=True)
+    time estimate printed before the first case starts, scaled by the finished runs `done` as the dry
+    run's is."""
+    measured = [0, 0.0, 0.0]
+    for p in list(done)[:CALIBRATION_RUNS]:
+        _add_measured(measured, p, store.case_folder(p.case_id))
+    print(_time_estimate(sum(estimate_seconds(p.case) for p in todo), slots, measured), file=stream, flush=True)
     from interphase.engines.progress import liggghts_stage
 
     return Progress(todo, slots, stream=stream, live=live, title=campaign.name,

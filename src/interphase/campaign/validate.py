@@ -159,6 +159,18 @@ def with_dem(pred: pd.DataFrame, dem: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def _fit_runs(card) -> Path | None:
+    """The committed summaries beside the card's `[criterion] fit` (the runs its criterion was fitted
+    on, their paired soil tests among them), or None. A DEM answer in the same cell at the same
+    stress plans the same soil tests (the same case ids), so they come back finished instead of
+    running again; a row of any other inputs is never taken (campaign.restore)."""
+    fit = card.extra.get("criterion", {}).get("fit")
+    if not fit:
+        return None
+    table = (Path(fit) if Path(fit).is_absolute() else card.path.parent / str(fit)).resolve().parent / "summaries.csv"
+    return table if table.exists() else None
+
+
 def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
                      executor: str | None = None, jobs: int | None = None, stream=None, protocol: dict | None = None,
                      rerun_failed: bool = False) -> dict:
@@ -180,7 +192,8 @@ def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal
             "normal_stress": float(normal_stress), "friction_ps": float(friction)}
     path = write_campaign(output / "simulate.toml", name="predict", case=case, sweep={"seed": [int(s) for s in seeds]},
                           executor=executor or "local", description=f"a profile on the soil card {card.path}")
-    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, rerun_failed=rerun_failed)
+    run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, rerun_failed=rerun_failed,
+              restore=_fit_runs(card))
     ens = campaign_ensembles(path)
     ens = ens[ens["test"] == "interface"] if "test" in ens else ens
     if ens.empty:
