@@ -184,3 +184,28 @@ def test_the_api_answers_as_the_command(tmp_path, capsys):
     with pytest.raises(ip.InputError, match="seeds"):
         ip.predict_dem(saw, 0.2, card, seeds=2, runs=tmp_path / "runs")
     assert not (tmp_path / "runs").exists()
+
+
+def test_simulate_on_an_areal_scan_shears_its_patch_in_the_3d_cell_with_the_fits_soil_tests(tmp_path, capsys):
+    """`predict SCAN --soil 3D-CARD --simulate --axis y`: the scan itself (not one line) is the 3D cell's
+    surface, its best-closing patch with the soil moving +y (surface/patch.py), in the cell the card's
+    criterion stands on; the soil tests are Group 1's own ids, so a run restores them from the fit's
+    committed runs and runs only the interface cases (the dry run says so). The engine runs a patch of
+    this scan in tests/test_scan_patch.py's tiny case."""
+    from interphase.campaign.validate import _fit_runs, simulate_campaign
+    from interphase.soil import load_card
+
+    scan = ROOT / "campaigns" / "profiles" / "frt-1.frt"
+    card = load_card(CARD)
+    surface = {"kind": "file", "path": str(scan), "areal": True, "direction": "+y"}
+    path, cell = simulate_campaign(card, surface, 0.3, [1, 2, 3], output=tmp_path / "sim")
+    assert "group1_kfs_3d.toml" in cell
+    capsys.readouterr()
+    assert main(["run", str(path), "--dry-run", "--list", "--plain", "--restore", str(_fit_runs(card))]) == 0
+    out = capsys.readouterr().out
+    assert out.count("interface-periodic3d-frt-1-areal-py") == 3, out
+    assert "3 restore" in out and "3 run" in out and out.count("box-periodic3d-box-mu0.9-user-prep0.387-s") == 3, out
+    card2 = load_card(ROOT / "soils" / "karlsruhe-fine-sand-2d.toml")
+    with pytest.raises(Exception, match="one line"):
+        simulate_campaign(card2, surface, 0.3, [1, 2, 3], output=tmp_path / "sim2")
+    assert not (tmp_path / "sim2").exists()

@@ -177,11 +177,11 @@ def test_predict_simulate_runs_a_profile_on_the_card(simulated_rows, tmp_path):
     (box,) = [f for f in rows_out.iterdir() if (f / "DONE").exists()
               and json.loads((f / "case.json").read_text())["inputs"]["test"] == "box"]
     shutil.copytree(box, tmp_path / "p" / box.name)
-    out = simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny)
+    out = simulate_profile(card, (x, z), 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny)
     assert out["seeds"] == 3 and out["delta_deg_lo"] <= out["delta_deg"] <= out["delta_deg_hi"]
     assert 5 < out["delta_deg"] < 60 and out["tan_phi"] > 0
     assert out["E"] == pytest.approx(out["tan_delta"] / out["tan_phi"], rel=0.05)
     done = sorted((tmp_path / "p").rglob("DONE"))
     assert len(done) == 6                                     # 3 interface cases, 3 soil tests (one copied)
-    assert simulate_profile(card, x, z, 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny) == out
+    assert simulate_profile(card, (x, z), 0.5, [1, 2, 3], output=tmp_path / "p", protocol=tiny) == out
     assert sorted((tmp_path / "p").rglob("DONE")) == done

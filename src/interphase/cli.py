@@ -470,7 +470,7 @@ def _cmd_predict_dem(args) -> int:
             raise InputError(message or f"{flag} is the criterion's; --simulate runs the DEM instead", where=flag,
                              fix=fix or f"drop {flag}, or drop --simulate")
     out = api.predict_dem(args.profile, args.friction, args.soil, smooth_delta_deg=args.smooth_delta, seeds=args.seeds,
-                          runs=args.runs, jobs=args.jobs, units=args.units, d50=_mm(args.d50),
+                          runs=args.runs, jobs=args.jobs, units=args.units, d50=_mm(args.d50), axis=args.axis,
                           stream=sys.stderr if args.json else sys.stdout, **_given(normal_stress=args.normal_stress))
     if args.json:
         _print_json(out)
@@ -479,7 +479,8 @@ def _cmd_predict_dem(args) -> int:
           f"{out['normal_stress'] / 1e3:g} kPa, {out['seeds']} seeds): tan δ {out['tan_delta']:.3f} "
           f"[{out['tan_delta_lo']:.3f}, {out['tan_delta_hi']:.3f}], "
           f"δ {out['delta_deg']:.2f}° [{out['delta_deg_lo']:.2f}, {out['delta_deg_hi']:.2f}], "
-          f"E {out['E']:.3f} [{out['E_lo']:.3f}, {out['E_hi']:.3f}], tan φ {out['tan_phi']:.3f}")
+          f"E {out['E']:.3f} [{out['E_lo']:.3f}, {out['E_hi']:.3f}], tan φ {out['tan_phi']:.3f}; θa of the surface "
+          f"sheared {out['theta_a_deg_92']:.2f}°")
     return 0
 
 

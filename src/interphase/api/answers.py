@@ -42,19 +42,22 @@ DEM_SEEDS = 3
 def predict_dem(profile: PathLike, friction: float | None = None, soil: PathLike | None = None, *,
                 smooth_delta_deg: float | None = None, seeds: int = 3, normal_stress: float = 100e3,
                 runs: PathLike | None = None, jobs: int | None = None, units: str | None = None,
-                d50: float | None = None, stream=None) -> dict:
+                d50: float | None = None, axis: str | None = None, stream=None) -> dict:
     """The DEM instead of the criterion (as `campaign predict … --soil CARD --simulate --json`): the
-    profile as measured sheared with the card's grains at `normal_stress` [Pa] and particle–surface
+    surface as measured sheared with the card's grains at `normal_stress` [Pa] and particle–surface
     `friction` (or `smooth_delta_deg`, as `predict`), packing seeds 1…`seeds` (≥ 3), in the cell the
     card's criterion stands on (campaign.validate.interface_case), with the card's soil test; a
     generated campaign in `runs` (default runs/predict/<card>/<profile name> beside the card),
     resumable; progress to `stream` (default stderr). Returns tan δ, E and δ with their 95 %
-    intervals, tan φ, the seeds, the cell and the campaign file. A line profile only: an areal scan
-    is refused (a campaign can take one line of it). `d50` [m], if given, must be the card's."""
+    intervals, tan φ, θa of the surface sheared, the seeds, the cell and the campaign file. A line is
+    sheared as measured; an areal scan (a 3D card's cell only) as the patch of the scan whose opposite
+    edges match best, the soil moving along +`axis` (x or y; surface/patch.py). `d50` [m], if given,
+    must be the card's."""
     from interphase.answer import friction_from
     from interphase.campaign.folders import beside, given
     from interphase.campaign.validate import simulate_profile
     from interphase.soil import card_d50_mm, load_card
+    from interphase.surface.base import check_axis
     from interphase.surface.readers import load_profile, read_scan
 
     if soil is None:
@@ -65,15 +68,17 @@ def predict_dem(profile: PathLike, friction: float | None = None, soil: PathLike
     normal_stress = checks.positive(normal_stress, "--normal-stress", "Pa", "100e3")
     card = load_card(soil)
     card_d50_mm(card, None if d50 is None else checks.d50(d50) * 1e3, "the DEM uses the card's grains")
-    if read_scan(str(profile), units).areal:
-        raise InputError("an areal scan: the DEM shears one line of it", where=str(profile),
-                         fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
-                             f"path = \"{profile}\", axis = \"x\", line = \"1/3\"}} (campaigns/study.toml's Group 5), "
-                             "or use the criterion (`campaign predict` without --simulate), which pools every line")
-    prof = load_profile(str(profile), units, None)
     out_dir, runs_from = (given(runs, "--runs") if runs else
                           beside(card.path, f"runs/predict/{card.name}/{Path(profile).stem}", "--runs"))
+    if read_scan(str(profile), units).areal:
+        surface = {"kind": "file", "path": str(Path(profile).resolve()), "areal": True,
+                   "direction": f"+{check_axis(axis or 'x', '--axis')}"}
+        if units is not None:
+            surface["units"] = units
+    else:
+        prof = load_profile(str(profile), units, None)
+        surface = (prof.x, prof.z)
     print(f"predict --simulate: runs folder {out_dir} ({runs_from})", file=stream or sys.stderr, flush=True)
-    out = simulate_profile(card, prof.x, prof.z, mu, range(1, seeds + 1), output=out_dir,
+    out = simulate_profile(card, surface, mu, range(1, seeds + 1), output=out_dir,
                            normal_stress=normal_stress, jobs=jobs, stream=stream)
     return out | {"profile": str(profile), "soil": str(card.path), "friction": mu, "normal_stress": normal_stress}

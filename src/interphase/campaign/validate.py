@@ -13,6 +13,7 @@ docs/convergence.md), in the quasi-2D device for a quasi-2D card and in the chos
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -171,27 +172,50 @@ def _fit_runs(card) -> Path | None:
     return table if table.exists() else None
 
 
-def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
+def simulate_campaign(card, surface, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
+                      executor: str | None = None, protocol: dict | None = None) -> tuple[Path, str]:
+    """The generated campaign `simulate_profile` runs, written to `output`/simulate.toml: (its path,
+    the cell's provenance). `surface`: a profile line (x, z) [m] as measured (the teeth keep their
+    physical size against the card's grains), or a profile table (an areal scan's patch: {"kind":
+    "file", "path", "areal": true, "direction"}), which needs a 3D cell (refused before anything is
+    written)."""
+    output = Path(output)
+    base, cell = interface_case(card, protocol)
+    if isinstance(surface, dict) and base.get("device") != "periodic3d":
+        raise InputError(f"an areal scan: the quasi-2D DEM shears one line of it ({cell})", where=str(surface.get("path")),
+                         fix="write a campaign whose profile is one line of the scan, e.g. profile = {kind = \"file\", "
+                             f"path = \"{surface.get('path')}\", axis = \"x\", line = \"1/3\"}} (campaigns/study.toml's "
+                             "Group 5), give a 3D card, or use the criterion (`campaign predict` without --simulate), "
+                             "which pools every line")
+    output.mkdir(parents=True, exist_ok=True)
+    if isinstance(surface, dict):
+        profile = dict(surface)
+    else:
+        prof = output / "profile.csv"
+        x, z = surface
+        pd.DataFrame({"x": np.asarray(x, float), "z": np.asarray(z, float)}).to_csv(prof, index=False, header=False)
+        profile = {"kind": "file", "path": str(prof.resolve()), "units": "m"}
+    case = {**base, "profile": profile, "normal_stress": float(normal_stress), "friction_ps": float(friction)}
+    path = write_campaign(output / "simulate.toml", name="predict", case=case, sweep={"seed": [int(s) for s in seeds]},
+                          executor=executor or "local", description=f"a profile on the soil card {card.path}")
+    return path, cell
+
+
+def simulate_profile(card, surface, friction: float, seeds, *, output: Path, normal_stress: float = 100e3,
                      executor: str | None = None, jobs: int | None = None, stream=None, protocol: dict | None = None,
                      rerun_failed: bool = False) -> dict:
-    """`campaign predict … --soil CARD --simulate`: the DEM on one surface profile (x, z [m], as
-    measured: the teeth keep their physical size against the card's grains) with the card's grains
-    at `normal_stress` [Pa] and particle–surface `friction`, packing seeds `seeds`, with the card's
-    soil test, in the card's interface cell (`interface_case`); a generated campaign in `output`
-    (resumable, local or SLURM). Returns tan δ, E and δ at the seed ensemble's peak with their 95 %
-    intervals, tan φ, the seeds, the campaign file and the cell (where it came from)."""
+    """`campaign predict … --soil CARD --simulate`: the DEM on one surface (`simulate_campaign`) with
+    the card's grains at `normal_stress` [Pa] and particle–surface `friction`, packing seeds `seeds`,
+    with the card's soil test, in the card's interface cell (`interface_case`), its soil tests restored
+    from the fit's committed runs where they are the same cases (`_fit_runs`); resumable, local or
+    SLURM. Returns tan δ, E and δ at the seed ensemble's peak with their 95 % intervals, tan φ, θa of
+    the surface as the cell shears it (filter 92, ° from vertical), the seeds, the campaign file and
+    the cell (where it came from)."""
     from interphase.campaign.element import run_cases
     from interphase.campaign.results import campaign_ensembles
 
-    output = Path(output)
-    prof = output / "profile.csv"
-    output.mkdir(parents=True, exist_ok=True)
-    pd.DataFrame({"x": np.asarray(x, float), "z": np.asarray(z, float)}).to_csv(prof, index=False, header=False)
-    base, cell = interface_case(card, protocol)
-    case = {**base, "profile": {"kind": "file", "path": str(prof.resolve()), "units": "m"},
-            "normal_stress": float(normal_stress), "friction_ps": float(friction)}
-    path = write_campaign(output / "simulate.toml", name="predict", case=case, sweep={"seed": [int(s) for s in seeds]},
-                          executor=executor or "local", description=f"a profile on the soil card {card.path}")
+    path, cell = simulate_campaign(card, surface, friction, seeds, output=output, normal_stress=normal_stress,
+                                   executor=executor, protocol=protocol)
     run_cases(path, executor=executor, jobs=jobs, stream=stream or sys.stderr, rerun_failed=rerun_failed,
               restore=_fit_runs(card))
     ens = campaign_ensembles(path)
@@ -202,6 +226,7 @@ def simulate_profile(card, x, z, friction: float, seeds, *, output: Path, normal
     r = ens.iloc[0]
     deg = lambda t: float(np.degrees(np.arctan(float(t))))
     return {"campaign": str(path), "cell": cell, "seeds": int(r["seeds"]), "tan_phi": float(r["tan_phi"]),
+            "theta_a_deg_92": float(r["theta_a_deg_92"]) if "theta_a_deg_92" in r else math.nan,
             "tan_delta": float(r["tan_delta"]), "tan_delta_lo": float(r["tan_delta_lo"]),
             "tan_delta_hi": float(r["tan_delta_hi"]), "E": float(r["E"]), "E_lo": float(r["E_lo"]),
             "E_hi": float(r["E_hi"]), "delta_deg": deg(r["tan_delta"]), "delta_deg_lo": deg(r["tan_delta_lo"]),
