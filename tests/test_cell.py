@@ -499,7 +499,7 @@ def test_the_model_against_laboratory_figures_draw(tmp_path):
 
 
 def test_the_cell_study_table_keeps_the_fields_it_groups_by():
-    """bench/cell_study.py on a committed study (docs/soils/grain_stiffness_stress): a --by field that
+    """studies/soil_cells/cell_study.py on a committed study (docs/soils/grain_stiffness_stress): a --by field that
     a CellResult also carries (preparation) names its group, not the result's own None."""
     import importlib.util
 
@@ -516,7 +516,7 @@ def test_the_cell_study_table_keeps_the_fields_it_groups_by():
 
 
 def test_a_cards_checks_print_as_one_row_per_record_the_fitted_one_first():
-    """bench/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, the other 14 records held out."""
+    """studies/soil_cells/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, the other 14 records held out."""
     import importlib.util
     import tomllib
 

@@ -230,7 +230,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     it was undecided at 3 seeds); friction × 1.3: YADE ratio 0.258 → differ; stiffness × 2: overlap
     × 0.71 → differ. Rolling off is not in this test: on a sliding flat it changes nothing, and on the
     rolling-held flat at μs 0.5 its effect needs the standard set's cell (the power table,
-    bench/crosscheck_power.py)."""
+    studies/crosscheck_power/crosscheck_power.py)."""
     path, true_out, true_report = true_mapping
     assert not true_report.missing
     j = true_report.judged.set_index("metric")
