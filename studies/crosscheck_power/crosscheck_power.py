@@ -7,7 +7,7 @@ For each alteration (friction × 1.3 on the sliding flat, rolling resistance off
 flat at μs 0.5, stiffness × 4 on the sliding flat) a campaign of that one group on seeds 1…N is
 written beside the output, the finished LIGGGHTS folders of the standard set's output are copied into
 an output of its own (`<output>-power-<name>`), and `crosscheck()` runs YADE there with the test-only
-mis-mapped engine (tests/test_crosscheck_power.py: no production flag), passed as an engine value. The campaign's
+mis-mapped engine (campaign.mismapped: no production flag), passed as an engine value. The campaign's
 `specimen_from` holds: YADE shears LIGGGHTS' specimens. Prints, per alteration, the judged rows.
 """
 
@@ -15,14 +15,10 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-
-from interphase.campaign.crosscheck import crosscheck  # noqa: E402
-from tests.test_crosscheck_power import _copy_done, mismapped_yade  # noqa: E402
+from interphase.campaign.crosscheck import crosscheck
+from interphase.campaign.mismapped import copy_done, mismapped_yade
 
 #: name → (group of the standard set, alteration, the metric it should move)
 ALTERATIONS = {
@@ -58,7 +54,7 @@ def main() -> None:
         path = out_root.parent / f"{out_root.name}-power-{name}.toml"
         path.write_text(one_group(text, group, a.seeds))
         out = out_root.parent / f"{out_root.name}-power-{name}"
-        _copy_done(out_root, out)
+        copy_done(out_root, out)
         report = crosscheck(path, output=out, engines=("liggghts", mismapped_yade(**alteration)))
         j = report.ensembles[report.ensembles["verdict"].notna()]
         print(f"\n## {name} × {alteration} on {group} (seeds 1–{a.seeds}); should move {metric}")

@@ -23,23 +23,20 @@ from __future__ import annotations
 import argparse
 import json
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "bench"))
 
 BOOT = 2000
 
 
 def sweep_runs(campaign: Path, save: Path | None, extra: list[Path], grains: dict, stress: float) -> pd.DataFrame:
     """One row per run: preparation, seed, phi_peak_deg, psi_max_deg, e0."""
-    from cell_study import from_runs
+    from interphase.report.cell_tables import cell_runs
 
-    got = from_runs(campaign)
+    got = cell_runs(campaign)
     if got is not None:
         summ = got[0].assign(preparation=got[0]["preparation"].fillna(1.0))     # the default is stored blank
         if save:

@@ -27,23 +27,20 @@ from __future__ import annotations
 import argparse
 import math
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_bill import project, run_times  # noqa: E402
-from sequential_coverage import populations  # noqa: E402
-
-from interphase.analysis.ensemble import ratio_interval, t_interval  # noqa: E402
-from interphase.campaign.compare import compare, seed_values  # noqa: E402
-from interphase.campaign.results import CommittedCurves, write_curves  # noqa: E402
+from interphase.analysis.ensemble import ratio_interval, t_interval
+from interphase.analysis.seed_draws import populations, project, run_times
+from interphase.campaign.compare import compare, seed_values
+from interphase.campaign.results import CommittedCurves, write_curves
 
 HERE = Path(__file__).resolve().parent
 ROOT = Path(__file__).resolve().parents[2]
+REPRO = ROOT / "docs" / "reproduction"
 #: each campaign and the folder its committed copy lives in
 CAMPAIGNS = {HERE / f"{name}.toml": HERE / "results" / name
              for name in ("scatter_size", "scatter_split")}
@@ -203,9 +200,10 @@ def price(t: pd.DataFrame) -> pd.DataFrame:
 
 
 def study_bill(t: pd.DataFrame, trials: int) -> None:
-    """The study at E ± 0.05 with each size (sequential_bill.project on scaled populations)."""
-    pops = populations()
-    times, box_time, today, _ = run_times()
+    """The study at E ± 0.05 with each size (analysis.seed_draws.project on scaled populations)."""
+    study = pd.read_csv(REPRO / "summaries.csv")
+    pops = populations(study, CommittedCurves(REPRO / "curves.parquet"))
+    times, box_time, today, _ = run_times(study)
     soils = len({p["b"].tobytes() for p in pops})
     print("\n| cell [D50] | interface sd × | soil sd × | wall × (interface, soil) | cap | soil seeds | cases reaching ± 0.05 | mean seeds | core-hours |")
     print("|---|---|---|---|---|---|---|---|---|")

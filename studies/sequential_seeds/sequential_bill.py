@@ -20,51 +20,16 @@ committed runs) and prints the share of physical cases already within ± 0.05 an
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_coverage import REPRO, _running, apply_rule, draws, populations  # noqa: E402
+from interphase.analysis.ensemble_table import ensemble_table
+from interphase.analysis.seed_draws import populations, project, run_times
+from interphase.campaign.results import CommittedCurves
 
-from interphase.analysis.ensemble import ratio_interval  # noqa: E402
-
-
-def run_times(group: str | None = None) -> tuple[dict[str, float], float, float, int]:
-    """(mean run time [s] per physical case, mean box run time [s], today's core-hours, runs), of one
-    group and its soil's box tests when `group` is given."""
-    s = pd.read_csv(REPRO / "summaries.csv")
-    if group:
-        mine = s[s["group"] == group]
-        s = pd.concat([mine, s[(s["test"] == "box") & s["gradation"].isin(mine["gradation"])]])
-    s["_case"] = s["label"].str.replace(r"-s\d+$", "", regex=True)
-    iface = s[s["test"] == "interface"]
-    return (iface.groupby("_case")["elapsed"].mean().to_dict(), float(s.loc[s["test"] == "box", "elapsed"].mean()),
-            float(s["elapsed"].sum()) / 3600, len(s))
-
-
-def project(pops, times, quantity: str, target: float, cap: int, m: int, trials: int, rng) -> dict:
-    ns = np.arange(3, cap + 1)
-    reached, seeds, hours = [], [], 0.0
-    for pop in pops:
-        a = draws(pop["a"], (trials, cap), rng, "normal", None)
-        ma, sa = _running(a, ns)
-        if quantity == "tan_delta":
-            half = stats.t.ppf(0.975, ns - 1) * sa / np.sqrt(ns)
-            lo, hi = ma - half, ma + half
-        else:
-            b = draws(pop["b"], (trials, m), rng, "normal", None)
-            mb, sb = b.mean(axis=1, keepdims=True), b.std(axis=1, ddof=1, keepdims=True)
-            lo, hi = ratio_interval(ma, sa, ns, mb, sb, m)
-        stop = apply_rule(lo, hi, ns, target, extra=1)
-        rows = np.arange(trials)
-        reached.append(((hi - lo)[rows, stop] / 2 <= target).mean())
-        seeds.append(ns[stop].mean())
-        hours += ns[stop].mean() * times[pop["case"]] / 3600
-    return dict(reached=float(np.mean(reached)), seeds=float(np.mean(seeds)), hours=hours)
+REPRO = Path(__file__).resolve().parents[2] / "docs" / "reproduction"
 
 
 def main(argv=None) -> None:
@@ -77,18 +42,15 @@ def main(argv=None) -> None:
                     help="one setting instead of the table's, e.g. --only E 0.1 24 20")
     args = ap.parse_args(argv)
     if args.ensembles:
-        from sequential_coverage import _Curves
-
-        from interphase.analysis.ensemble_table import ensemble_table
-
-        table = ensemble_table(pd.read_csv(REPRO / "summaries.csv"), _Curves(REPRO / "curves.parquet"))
+        table = ensemble_table(pd.read_csv(REPRO / "summaries.csv"), CommittedCurves(REPRO / "curves.parquet"))
         table.to_csv(args.ensembles, index=False, float_format="%.5g")
         half = (table["E_hi"] - table["E_lo"]) / 2
         print(f"today's ensembles ({len(table)} physical cases) → {args.ensembles}: E half-width median "
               f"{half.median():.3f}; within ± 0.05 {np.mean(half <= 0.05):.0%}, ± 0.1 {np.mean(half <= 0.1):.0%}")
     rng = np.random.default_rng(args.seed)
-    pops = [p for p in populations() if args.group in (None, p["group"])]
-    times, box_time, today, runs = run_times(args.group)
+    summ = pd.read_csv(REPRO / "summaries.csv")
+    pops = [p for p in populations(summ, CommittedCurves(REPRO / "curves.parquet")) if args.group in (None, p["group"])]
+    times, box_time, today, runs = run_times(summ, args.group)
     soils = len({p["b"].tobytes() for p in pops})
     print(f"today{' (' + args.group + ')' if args.group else ''}: {runs} runs (3 seeds a case, 10 a soil), "
           f"{today:.1f} core-hours, {today / 2:.1f} h on 2 cores")

@@ -16,25 +16,24 @@ of every run the campaign used, restored ones included).
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).parent))
-from sequential_bill import project, run_times  # noqa: E402
-from sequential_coverage import REPRO, _Curves, populations  # noqa: E402
+import interphase as ip
+from interphase.analysis.ensemble_table import ensemble_table
+from interphase.analysis.seed_draws import populations, project, run_times
+from interphase.campaign.results import CommittedCurves
 
-import interphase as ip  # noqa: E402
-from interphase.analysis.ensemble_table import ensemble_table  # noqa: E402
+REPRO = Path(__file__).resolve().parents[2] / "docs" / "reproduction"
 
 
 def tables(args) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(summaries, ensembles) of the campaign's finished runs."""
     if args.summaries:
         s = pd.read_csv(args.summaries)
-        return s, ensemble_table(s, _Curves(args.curves))
+        return s, ensemble_table(s, CommittedCurves(args.curves))
     return ip.summaries(args.campaign), ip.ensembles(args.campaign)
 
 
@@ -65,8 +64,9 @@ def main(argv=None) -> None:
     boxes = int(ens["box_seeds"].max())
     used = summ[(summ["group"] == args.group) | (summ["test"] == "box")]
     hours = used["elapsed"].sum() / 3600
-    pops = [p for p in populations() if p["group"] == args.group]
-    times, box_time, today, _ = run_times(args.group)
+    study = pd.read_csv(REPRO / "summaries.csv")
+    pops = [p for p in populations(study, CommittedCurves(REPRO / "curves.parquet")) if p["group"] == args.group]
+    times, box_time, today, _ = run_times(study, args.group)
     proj = project(pops, times, q, target, rule.max, boxes, args.trials, np.random.default_rng(1))
     proj_h = proj["hours"] + boxes * box_time / 3600
     print(f"\n{len(ens)} physical cases, target ± {target:g} in {q}, cap {rule.max}, {boxes} soil seeds; "

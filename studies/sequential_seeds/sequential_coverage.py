@@ -44,26 +44,11 @@ import pandas as pd
 from scipy import stats
 
 from interphase.analysis.ensemble import ratio_interval
-from interphase.analysis.ensemble_table import ensemble_tables
-from interphase.campaign.results import CommittedCurves as _Curves
+from interphase.analysis.seed_draws import apply_rule, draws, populations, running
+from interphase.campaign.results import CommittedCurves
 
 ROOT = Path(__file__).resolve().parents[2]
 REPRO = ROOT / "docs" / "reproduction"
-
-
-def populations() -> list[dict]:
-    """Per physical case: its interface seeds' peak states `a`, its soil's box seeds' `b` [-]."""
-    summ = pd.read_csv(REPRO / "summaries.csv")
-    table, states, pools = ensemble_tables(summ, _Curves(REPRO / "curves.parquet"))
-    iface = summ[summ["test"] == "interface"].assign(_case=lambda d: d["label"].str.replace(r"-s\d+$", "", regex=True))
-    out = []
-    for (group, case), g in iface.groupby(["group", "_case"]):
-        boxes = sorted({b for p in g["pair_id"].dropna() for b in pools.get(p, ())})
-        a = np.array([states[c] for c in g["case_id"] if c in states])
-        b = np.array([states[c] for c in boxes if c in states])
-        if a.size >= 2 and b.size >= 2:
-            out.append(dict(group=group, case=case, a=a, b=b))
-    return out
 
 
 def pooled_shape(pops: list[dict], side: str) -> np.ndarray:
@@ -77,49 +62,18 @@ def pooled_shape(pops: list[dict], side: str) -> np.ndarray:
     return np.concatenate(out)
 
 
-def draws(v: np.ndarray, shape, rng, how: str, pool: np.ndarray) -> np.ndarray:
-    """`shape` seed values of a population `v` (see the module doc for `how`)."""
-    m, s = v.mean(), v.std(ddof=1)
-    if how == "normal":
-        return rng.normal(m, s, size=shape)
-    if how == "pooled":
-        return m + s * rng.choice(pool, size=shape)
-    adj = m + (v - m) * math.sqrt(v.size / (v.size - 1))
-    return rng.choice(adj, size=shape)
-
-
-def _running(x: np.ndarray, ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Means and sds (ddof 1) of the first n columns of x, for each n in ns: (trials, len(ns))."""
-    c1, c2 = np.cumsum(x, axis=1)[:, ns - 1], np.cumsum(x * x, axis=1)[:, ns - 1]
-    mean = c1 / ns
-    var = np.maximum(c2 - ns * mean * mean, 0) / (ns - 1)
-    return mean, np.sqrt(var)
-
-
 def intervals(pop: dict, quantity: str, ns: np.ndarray, trials: int, rng, how: str, pools: dict):
     """(value, lo, hi) arrays (trials, len(ns)) of `quantity` after n seeds, and the truth."""
     a = draws(pop["a"], (trials, int(ns.max())), rng, how, pools["a"])
-    ma, sa = _running(a, ns)
+    ma, sa = running(a, ns)
     if quantity == "tan_delta":
         half = stats.t.ppf(0.975, ns - 1) * sa / np.sqrt(ns)
         return ma, ma - half, ma + half, pop["a"].mean()
     nb = np.maximum(ns, 10)
     b = draws(pop["b"], (trials, int(nb.max())), rng, how, pools["b"])
-    mb, sb = _running(b, nb)
+    mb, sb = running(b, nb)
     lo, hi = ratio_interval(ma, sa, ns, mb, sb, nb)
     return ma / mb, lo, hi, pop["a"].mean() / pop["b"].mean()
-
-
-def apply_rule(lo, hi, ns, target: float, extra: int = 0) -> np.ndarray:
-    """Column index (into ns) where the rule stops each trial: the first n whose half-width is within
-    the target on `extra` + 1 rounds in a row (campaign.sequential: extra = CONFIRM = 1), else the
-    last (the cap)."""
-    ok = (hi - lo) / 2 <= target
-    run = ok.copy()
-    for i in range(1, extra + 1):
-        run[:, i:] &= ok[:, :-i]
-        run[:, :i] = False
-    return np.where(run.any(axis=1), run.argmax(axis=1), ns.size - 1)
 
 
 def coverage(pops, quantity, start, cap, step, target, trials, rng, how, pools, extra=0) -> dict:
@@ -148,7 +102,7 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
-    pops = populations()
+    pops = populations(pd.read_csv(REPRO / "summaries.csv"), CommittedCurves(REPRO / "curves.parquet"))
     pools = {k: pooled_shape(pops, k) for k in ("a", "b")}
     print(f"{len(pops)} physical cases; {args.trials} trials each; {time.perf_counter() - t0:.1f} s to read")
     print(f"{'draw':<9} {'quantity':<10} {'rule':<33} {'target':>6} {'coverage':>9} {'worst':>6} {'seeds':>6} "

@@ -21,8 +21,7 @@ import pandas as pd
 from interphase.analysis.ensemble import t_interval
 from interphase.campaign.calibrate import TOLERANCES, verdict
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cell_study import from_runs  # noqa: E402
+from interphase.report.cell_tables import cell_runs as from_runs
 
 KEEP = ["case_id", "seed", "strain_rate", "phi_peak_deg", "eps1_peak", "psi_max_deg", "phi_end_deg",
         "inertial_number_max", "sigma3_departure_max", "elapsed"]

@@ -11,13 +11,10 @@ docs/soils/karlsruhe-fine-sand/angles_held_out.png: the 3D card's 14 held-out re
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-from scale_misfit import read_reports  # noqa: E402
-
-from interphase.report.cell_figures import angles_figure  # noqa: E402
+from interphase.report.cell_figures import angles_figure
+from interphase.report.cell_tables import read_verification
 
 
 def main(argv=None) -> int:
@@ -26,7 +23,7 @@ def main(argv=None) -> int:
     ap.add_argument("reports", nargs="+", type=Path)
     ap.add_argument("--skip", action="append", default=[], help="a record to leave out (its name, e.g. TMD17)")
     a = ap.parse_args(argv)
-    rows = read_reports(a.reports)
+    rows = read_verification(a.reports)
     rows = rows[~rows["record"].isin(a.skip)]
     for p in angles_figure(rows.to_dict("records"), a.out):
         print(p)

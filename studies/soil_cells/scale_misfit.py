@@ -17,18 +17,13 @@ from pathlib import Path
 import pandas as pd
 
 from interphase.campaign.calibrate import TOLERANCES
+from interphase.report.cell_tables import read_verification
 
 TOL = {"phi": TOLERANCES["phi_peak_deg"], "psi": TOLERANCES["psi_max_deg"]}     # [°]
 
 
-def read_reports(folders) -> pd.DataFrame:
-    """The rows of several reports' verification.csv together, one per record (a record in two: the
-    later folder's)."""
-    return pd.concat([pd.read_csv(Path(f) / "verification.csv") for f in folders]).drop_duplicates("record", keep="last")
-
-
 def misses(folders: list[Path]) -> pd.DataFrame:
-    v = read_reports(folders)
+    v = read_verification(folders)
     return pd.DataFrame({"record": v.record, "stress_kPa": v.confining_stress / 1e3, "dr_lab": v.relative_density,
                          "e0": v.void_ratio, "phi": v.phi_peak_deg - v.lab_phi, "psi": v.psi_max_deg - v.lab_psi,
                          "n": v.n_seeds}).set_index("record")

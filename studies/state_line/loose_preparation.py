@@ -7,7 +7,7 @@ The preparation scales the grains' sliding and rolling friction during the isotr
 (0: frictionless, densest; 1: the grains' own; above 1 more than their own, up to
 case.PREPARATION_MAX); the compression restores the grains' own. This probe runs the state line's
 case at preparations (FACTORS) 1 and above, and reads each run by the state line's code
-(studies/state_line/state_line.py `state_row`: φ_peak, ψ_max, e0, Rowe's φ_f, the end).
+(analysis.rowe `state_row`: φ_peak, ψ_max, e0, Rowe's φ_f, the end).
 
     PYTHONPATH=src python studies/state_line/loose_preparation.py [--factors 1.5 2.5] [--seeds 1 2] \
         [--runs runs/loose-preparation] [--save docs/soils/loose_preparation]
@@ -22,16 +22,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from state_line import state_row  # noqa: E402
+from interphase.analysis.rowe import state_row
 
-from interphase.campaign.runner import run_single  # noqa: E402
-from interphase.case import Case, case_from_dict  # noqa: E402
+from interphase.campaign.runner import run_single
+from interphase.case import Case, case_from_dict
 
 HERE = Path(__file__).resolve().parent
 ROOT = Path(__file__).resolve().parents[2]

@@ -6,7 +6,7 @@ its peak, the Karlsruhe fine sand's records against spheres of its grading at G 
 
 From committed data only (no engine). Rowe (1962) in triaxial compression: σ1′/σ3′ = K (1 + r),
 r = −dεv/dε1, K = tan²(45° + φ_f/2). Per specimen:
-- at the peak (studies/state_line/state_line.state_row: r over ε1 within ±0.5 % of the peak): φ_f, and the lag
+- at the peak (analysis.rowe.state_row: r over ε1 within ±0.5 % of the peak): φ_f, and the lag
   ε1 at ψ_max − ε1 at the peak; for the sand's 15 records and for the 82 runs to 15 % of ε1 in
   docs/soils/karlsruhe-fine-sand/triaxial_curves.parquet (500 MPa spheres: the present fit's first
   iteration, shared with the fit before, and that fit's second iteration and checks; friction
@@ -31,11 +31,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from state_line import record_rows, state_row  # noqa: E402
+from interphase.analysis.rowe import record_rows, state_row
 
-from interphase.analysis.ensemble import t_interval  # noqa: E402
-from interphase.analysis.triaxial import friction_angle  # noqa: E402
+from interphase.analysis.ensemble import t_interval
+from interphase.analysis.triaxial import friction_angle
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORDS = ROOT / "lab" / "soils" / "karlsruhe-fine-sand" / "drained-triaxial"

@@ -8,7 +8,7 @@ Per run (the campaign's finished runs, or the committed copy in --save) and per 
 code (analysis.triaxial.shear_state): φ_peak, ψ_max, e0, the end state, and Rowe's friction part at
 the peak, φ_f = asin((K − 1)/(K + 1)) with K = R_peak / (1 + r_peak) (triaxial compression,
 σ1′/σ3′ = K (1 − dεv/dε1)), r_peak the dilatancy rate −dεv/dε1 of a straight line over ε1 within
-±ROWE_HALF of the peak, and ψ at the peak from r_peak (the ψ_max formula); ε1 at ψ_max is the centre of
+±0.5 % of the peak (analysis.rowe), and ψ at the peak from r_peak (the ψ_max formula); ε1 at ψ_max is the centre of
 its window. The comparison in the (ψ_max, φ_peak) plane: a least-squares line through the
 model's runs, and each record's φ_peak minus that line at the record's ψ_max (mean over the records,
 Student-t 95 % interval). Rowe's relation is read as stress-independent, so records at 50–400 kPa are
@@ -19,44 +19,16 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cell_study import from_runs  # noqa: E402
-
-from interphase.analysis.triaxial import friction_angle, psi_from_rate, shear_state  # noqa: E402
-from interphase.io.lab_triaxial import read_triaxial  # noqa: E402
-
-ROWE_HALF = 0.005      # the rate at the peak: ε1 within ±0.5 % of it
-
-
-def rate_at(eps1, epsv, at: float) -> float:
-    """−dεv/dε1 of a straight line over ε1 within ±ROWE_HALF of `at`; NaN with < 3 samples there."""
-    x, v = np.asarray(eps1, float), np.asarray(epsv, float)
-    sel = np.abs(x - at) <= ROWE_HALF
-    return -float(np.polyfit(x[sel], v[sel], 1)[0]) if sel.sum() >= 3 else math.nan
-
-
-def rowe_friction_deg(ratio_peak: float, rate_peak: float) -> float:
-    """Rowe's friction part at the peak [°] (module docstring): the Mohr–Coulomb angle of K."""
-    return float(friction_angle(ratio_peak / (1 + rate_peak)))
-
-
-def state_row(eps1, epsv, ratio, e) -> dict:
-    s = shear_state(eps1, epsv, ratio, e)
-    r_peak = rate_at(eps1, epsv, s.eps1_peak)
-    return dict(phi_peak_deg=s.phi_peak_deg, eps1_peak=s.eps1_peak, psi_max_deg=s.psi_max_deg,
-                eps1_psi=s.eps1_psi + s.window / 2, rate_max=s.dilatancy_max, rate_peak=r_peak,
-                psi_peak_deg=float(psi_from_rate(r_peak)),
-                phi_end_deg=s.phi_end_deg, e0=float(np.asarray(e, float)[0]), e_end=s.e_end,
-                dilatancy_end=s.dilatancy_end, eps1_last=s.eps1_last,
-                phi_f_deg=rowe_friction_deg(s.ratio_peak, r_peak))
-
+from interphase.analysis.rowe import record_rows, state_row
+from interphase.analysis.triaxial import friction_angle
+from interphase.io.lab_triaxial import read_triaxial
+from interphase.report.cell_tables import cell_runs as from_runs
 
 def model_rows(summ: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
     rows = []
@@ -66,16 +38,6 @@ def model_rows(summ: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
         rows.append({"source": "model", "name": f"prep {r['preparation']:g} s{int(r['seed'])}",
                      "preparation": r["preparation"], "seed": int(r["seed"]), "sigma3_kPa": r["normal_stress"] / 1e3,
                      **state_row(c["eps1"], c["epsv"], c["ratio"], c["e"])})
-    return pd.DataFrame(rows)
-
-
-def record_rows(folder: Path) -> pd.DataFrame:
-    rows = []
-    for p in sorted(folder.glob("*.dat")):
-        rec = read_triaxial(p)
-        t = rec.table
-        rows.append({"source": "sand", "name": p.stem, "sigma3_kPa": rec.sigma3_start / 1e3,
-                     **state_row(t["eps1"], t["epsv"], t["ratio"], t["e"])})
     return pd.DataFrame(rows)
 
 
