@@ -200,7 +200,7 @@ def _write(path: Path, text: str) -> Path:
     return path
 
 
-SHIPPED = ("campaigns/group5.toml", "campaigns/study.toml", "studies/sequential_seeds/study_sequential.toml")
+SHIPPED = ("campaigns/group5.toml", "campaigns/study.toml", "studies/reproduction/study_sequential.toml")
 LOAD = """import json, sys, time
 from interphase.campaign.schema import load_campaign
 import SurfaceTopography  # noqa: F401  (its import is not the load's cost)

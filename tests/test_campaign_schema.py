@@ -116,7 +116,7 @@ def test_the_precision_campaigns_are_the_study_s_cases():
                 if x.role == "interface" and x.case.seed <= 3 and (groups is None or x.group in groups)}
 
     study = _shipped("study.toml")
-    whole = _shipped("../studies/sequential_seeds/study_sequential.toml")
+    whole = _shipped("../studies/reproduction/study_sequential.toml")
     assert cases(whole) == cases(study) and len(cases(study)) == 378
     g1 = _shipped("../studies/sequential_seeds/group1_sequential.toml")
     assert cases(g1) == cases(study, {"group1"}) and len(cases(g1)) == 81

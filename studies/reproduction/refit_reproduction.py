@@ -8,7 +8,7 @@ the criterion's check against every case, and the findings tables.
 --study: docs/reproduction/ (campaigns/study.toml); --sandlike: docs/reproduction/group1_sandlike/;
 --kfs2d, --kfs3d: Group 1 on the Karlsruhe fine sand, studies/kfs_group1_2d/results/ and studies/kfs_group1_3d/results/;
 --precision: the study's sequential rerun to E ± 0.1, docs/reproduction/precision/study/
-(studies/sequential_seeds/study_sequential.toml; studies/reproduction/findings_moved.py reads it against --study).
+(studies/reproduction/study_sequential.toml; studies/reproduction/findings_moved.py reads it against --study).
 The report is written to DIR/<name>/ (default /tmp/refit). --commit copies its results where the
 repository keeps them: the sequential study's (--precision) criterion.json to
 src/interphase/data/criterion_reproduction.json and, with --figures, its figures to
@@ -40,7 +40,7 @@ SETS = {"study": (REPRO, ROOT / "campaigns" / "study.toml"),
         "sandlike": (REPRO / "group1_sandlike", ROOT / "campaigns" / "soils" / "group1_sandlike.toml"),
         "kfs2d": (STUDIES / "kfs_group1_2d" / "results", STUDIES / "kfs_group1_2d" / "group1_kfs_2d.toml"),
         "kfs3d": (STUDIES / "kfs_group1_3d" / "results", STUDIES / "kfs_group1_3d" / "group1_kfs_3d.toml"),
-        "precision": (REPRO / "precision" / "study", ROOT / "studies" / "sequential_seeds" / "study_sequential.toml")}
+        "precision": (REPRO / "precision" / "study", ROOT / "studies" / "reproduction" / "study_sequential.toml")}
 
 
 #: the figures a set's folder keeps when it holds none yet (the real-sand sets' Figs. 6.8, 6.10a and the check)
