@@ -109,8 +109,9 @@ def test_group4_reproduces_table_6_2():
 
 
 def test_the_precision_campaigns_are_the_study_s_cases():
-    """campaigns/precision/ resume from the committed study table (--restore): their cases on seeds
-    1-3 must be exactly the study's (same canonical inputs, so the same case ids), each group's."""
+    """The precision campaigns (studies/sequential_seeds/, studies/reproduction/) resume from the
+    committed study table (--restore): their cases on seeds 1-3 must be exactly the study's (same
+    canonical inputs, so the same case ids), each group's."""
     def cases(c, groups=None):
         return {(x.group, canonical_json(x.case.canonical())) for x in c.cases
                 if x.role == "interface" and x.case.seed <= 3 and (groups is None or x.group in groups)}
