@@ -200,7 +200,7 @@ def _write(path: Path, text: str) -> Path:
     return path
 
 
-SHIPPED = ("group5.toml", "study.toml", "precision/study_sequential.toml")
+SHIPPED = ("campaigns/group5.toml", "campaigns/study.toml", "studies/reproduction/study_sequential.toml")
 LOAD = """import json, sys, time
 from interphase.campaign.schema import load_campaign
 import SurfaceTopography  # noqa: F401  (its import is not the load's cost)
@@ -214,7 +214,7 @@ def bench_load_shipped() -> dict:
     root = Path(__file__).resolve().parents[1]
     out = {}
     for name in SHIPPED:
-        run = subprocess.run([sys.executable, "-c", LOAD, str(root / "campaigns" / name)], capture_output=True,
+        run = subprocess.run([sys.executable, "-c", LOAD, str(root / name)], capture_output=True,
                              text=True, check=True, env={**os.environ, "PYTHONPATH": str(root / "src")})
         out[name] = json.loads(run.stdout)
     return out

@@ -13,17 +13,15 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
 
-from interphase.campaign.run import campaign_status  # noqa: E402
-from interphase.campaign.store import CampaignStore  # noqa: E402
+from interphase.campaign.run import campaign_status
+from interphase.campaign.store import CampaignStore
 
 GAP = 15 * 60.0     # [s] a pause longer than this starts a new stretch
 

@@ -109,16 +109,17 @@ def test_group4_reproduces_table_6_2():
 
 
 def test_the_precision_campaigns_are_the_study_s_cases():
-    """campaigns/precision/ resume from the committed study table (--restore): their cases on seeds
-    1-3 must be exactly the study's (same canonical inputs, so the same case ids), each group's."""
+    """The precision campaigns (studies/sequential_seeds/, studies/reproduction/) resume from the
+    committed study table (--restore): their cases on seeds 1-3 must be exactly the study's (same
+    canonical inputs, so the same case ids), each group's."""
     def cases(c, groups=None):
         return {(x.group, canonical_json(x.case.canonical())) for x in c.cases
                 if x.role == "interface" and x.case.seed <= 3 and (groups is None or x.group in groups)}
 
     study = _shipped("study.toml")
-    whole = _shipped("precision/study_sequential.toml")
+    whole = _shipped("../studies/reproduction/study_sequential.toml")
     assert cases(whole) == cases(study) and len(cases(study)) == 378
-    g1 = _shipped("precision/group1_sequential.toml")
+    g1 = _shipped("../studies/sequential_seeds/group1_sequential.toml")
     assert cases(g1) == cases(study, {"group1"}) and len(cases(g1)) == 81
     assert whole.seeds.max == g1.seeds.max == 24 and whole.seeds.halfwidth == g1.seeds.halfwidth == 0.1
 

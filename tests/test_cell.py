@@ -499,32 +499,29 @@ def test_the_model_against_laboratory_figures_draw(tmp_path):
 
 
 def test_the_cell_study_table_keeps_the_fields_it_groups_by():
-    """bench/cell_study.py on a committed study (docs/soils/grain_stiffness_stress): a --by field that
-    a CellResult also carries (preparation) names its group, not the result's own None."""
-    import importlib.util
-
+    """report.cell_tables (studies/soil_cells/cell_study.py) on a committed study
+    (docs/soils/grain_stiffness_stress): a --by field that a CellResult also carries (preparation)
+    names its group, not the result's own None."""
     import pandas as pd
 
-    spec = importlib.util.spec_from_file_location("cell_study", ROOT / "bench" / "cell_study.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    from interphase.report.cell_tables import cell_ensembles
+
     saved = ROOT / "docs" / "soils" / "grain_stiffness_stress"
     summ, curves = pd.read_csv(saved / "summaries.csv", dtype={"case_id": str}), pd.read_parquet(saved / "cell_curves.parquet")
-    table = mod.ensembles(summ, curves, ["shear_modulus", "preparation"])
+    table = cell_ensembles(summ, curves, ["shear_modulus", "preparation"])
     assert sorted(set(table["preparation"])) == [0.24, 0.2865, 0.3115, 0.4122]
     assert (table["n_seeds"] == 3).all() and len(table) == 8
 
 
 def test_a_cards_checks_print_as_one_row_per_record_the_fitted_one_first():
-    """bench/card_checks.py on the shipped 3D Karlsruhe card: TMD17 fitted, the other 14 records held out."""
-    import importlib.util
+    """report.cell_tables.card_markdown (studies/soil_cells/card_checks.py) on the shipped 3D Karlsruhe
+    card: TMD17 fitted, the other 14 records held out."""
     import tomllib
 
-    spec = importlib.util.spec_from_file_location("card_checks", ROOT / "bench" / "card_checks.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    from interphase.report.cell_tables import card_markdown
+
     card = tomllib.loads((ROOT / "soils" / "karlsruhe-fine-sand.toml").read_text())
-    table = mod.markdown(card).splitlines()
+    table = card_markdown(card).splitlines()
     assert len(table) == 2 + 1 + len(card["verification"]) and table[2].startswith("| TMD17 (fitted) |")
     tmd13 = next(v for v in card["verification"] if v["record"] == "TMD13.dat")
     assert f" / {tmd13['measured']['phi_peak_deg']:.1f} (" in next(r for r in table if r.startswith("| TMD13 |"))

@@ -123,7 +123,7 @@ def test_ensembles_carry_the_physical_inputs():
 
 
 def test_sequential_dry_run_says_what_each_count_is_and_how_long(tmp_path, capsys):
-    assert main(["run", str(ROOT / "campaigns" / "precision" / "group1_sequential.toml"), "--dry-run",
+    assert main(["run", str(ROOT / "studies" / "sequential_seeds" / "group1_sequential.toml"), "--dry-run",
                  "--runs", str(tmp_path / "r")]) == 0
     out = capsys.readouterr().out
     assert "at most (sequential seeds: up to 24 per physical case)" in out

@@ -1,19 +1,16 @@
-"""Can the cross-check see a wrong YADE mapping? (groundwork of its power study)
+"""Can the cross-check see a wrong YADE mapping? (groundwork of its power study, studies/crosscheck_power/)
 
 The YADE side is run with a deliberate mis-mapping — particle–surface friction × k, rolling
-resistance off, stiffness × k — WITHOUT a production flag: the YADE engine renders its input as data
-(params.json, engines/yade.py), and `MismappedYade` is a test-only subclass whose render() alters
-that data. `mismapped_yade(...)` gives it as an engine value (engines.base.EngineSpec), which
-`crosscheck(..., engines=...)` takes as it takes any argument: campaign planning, case ids and runs
-go through the ordinary code, and the value travels to the local executor's spawned workers (the
-class by reference: they import this module). Its recipe id mixes in the alteration, so its cases
-never share a folder (a case id) with the true mapping's or with another alteration's.
+resistance off, stiffness × k — WITHOUT a production flag: campaign.mismapped's `MismappedYade`
+alters the data the YADE engine renders (params.json), and `mismapped_yade(...)` gives it as an
+engine value (engines.base.EngineSpec), which `crosscheck(..., engines=...)` takes as it takes any
+argument: campaign planning, case ids and runs go through the ordinary code. Its recipe id mixes in
+the alteration, so its cases never share a folder (a case id) with the true mapping's or with another
+alteration's.
 """
 
 from __future__ import annotations
 
-import copy
-import hashlib
 import json
 
 import numpy as np
@@ -22,50 +19,14 @@ import pytest
 
 from interphase.campaign.crosscheck import METRICS, crosscheck
 from interphase.cli import main
-from interphase.engines.base import EngineSpec, engine_spec
+from interphase.campaign.mismapped import copy_done, mismapped_yade
+from interphase.engines.base import engine_spec
 from interphase.engines.yade import Yade
 from tests.campaign_files import toml_text
 from tests.conftest import need_binary
 
 #: the gross mis-mapping of the power study: each alteration alone or together
 GROSS = {"friction": 1.3, "rolling": False, "stiffness": 4.0}
-
-
-def mismap(params: dict, *, friction: float = 1.0, rolling: bool = True, stiffness: float = 1.0) -> dict:
-    """A copy of YADE's params.json data with the particle–surface friction × `friction`, rolling
-    resistance off (`rolling=False`: eta, krot, the facet values 0) and Young's moduli (grains and
-    walls: every contact stiffness) × `stiffness`."""
-    p = copy.deepcopy(params)
-    m = p["material"]
-    m["mu_ps"] *= friction
-    if not rolling:
-        m.update(eta=0.0, krot=0.0, krot_wall=0.0, mu_r=0.0)
-    m["E"] *= stiffness
-    m["E_wall"] *= stiffness
-    return p
-
-
-class MismappedYade(Yade):
-    """The Yade engine whose params.json is `mismap(params, **alteration)` (test only)."""
-
-    def __init__(self, *args, alteration: tuple = (), **kwargs):
-        super().__init__(*args, **kwargs)
-        self.alteration = dict(alteration)
-
-    def render(self, case):
-        files = super().render(case)
-        files["params.json"] = json.dumps(mismap(json.loads(files["params.json"]), **self.alteration),
-                                          allow_nan=False)
-        return files
-
-    def recipe_id(self) -> str:
-        mix = super().recipe_id() + json.dumps(self.alteration, sort_keys=True)
-        return hashlib.sha256(mix.encode()).hexdigest()[:16]
-
-
-def mismapped_yade(**alteration) -> EngineSpec:
-    """This machine's YADE as an engine value whose class is MismappedYade with `alteration`."""
-    return engine_spec("yade", cls=MismappedYade, options=(("alteration", tuple(sorted(alteration.items()))),))
 
 
 def test_mismapping_alters_only_the_named_parameters():
@@ -130,17 +91,6 @@ TINY_PERIODIC_TABLES = dict(
     pairs={"box": False},
     crosscheck={"critical_ratio_abs": 0.03, "angle_deg": 3.0, "overlap_rel": 0.10, "stress_ratio_rel": 0.10})
 TINY_PERIODIC = toml_text(**TINY_PERIODIC_TABLES)
-
-
-def _copy_done(src, dst, engine: str = "liggghts") -> None:
-    """Finished case folders of `engine` from src into dst (a variant's output reuses them)."""
-    import shutil
-
-    dst.mkdir(parents=True, exist_ok=True)
-    for folder in src.iterdir():
-        case = folder / "case.json"
-        if (folder / "DONE").exists() and case.exists() and json.loads(case.read_text())["engine"] == engine:
-            shutil.copytree(folder, dst / folder.name, dirs_exist_ok=True)
 
 
 @pytest.fixture(scope="module")
@@ -230,7 +180,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     it was undecided at 3 seeds); friction × 1.3: YADE ratio 0.258 → differ; stiffness × 2: overlap
     × 0.71 → differ. Rolling off is not in this test: on a sliding flat it changes nothing, and on the
     rolling-held flat at μs 0.5 its effect needs the standard set's cell (the power table,
-    bench/crosscheck_power.py)."""
+    studies/crosscheck_power/crosscheck_power.py)."""
     path, true_out, true_report = true_mapping
     assert not true_report.missing
     j = true_report.judged.set_index("metric")
@@ -238,7 +188,7 @@ def test_each_mismapping_differs_on_its_metric_while_the_true_mapping_agrees(tru
     assert j.loc["residual_stress_ratio", "verdict"] == "agree"
     assert j.loc["overlap_mean_d50", "verdict"] == "agree"
     out = true_out.parent / "friction-and-stiffness"
-    _copy_done(true_out, out)                              # the same LIGGGHTS runs: no rerun
+    copy_done(true_out, out)                              # the same LIGGGHTS runs: no rerun
     report = crosscheck(path, output=out, engines=("liggghts", mismapped_yade(friction=1.3, stiffness=2.0)))
     assert not report.missing
     _print_rows("friction x 1.3 and stiffness x 2", report)

@@ -38,7 +38,7 @@ def test_critical_state_is_the_mean_of_seed_means_with_a_t_interval():
 
 def _noisy_seeds(rng, trend, n, sd=0.035):
     """n runs of `trend` with the well-graded soil's run-to-run noise: sd 0.035 about the seed mean,
-    correlated over ~0.5 D50 (Gaussian kernel of sd 0.25 D50; bench/peak_estimators.py)."""
+    correlated over ~0.5 D50 (Gaussian kernel of sd 0.25 D50; studies/peak_estimators/peak_estimators.py)."""
     step = X[1] - X[0]
     k = np.arange(-40, 41) * step
     kern = np.exp(-0.5 * (k / (0.25 * D50)) ** 2)

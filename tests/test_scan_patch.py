@@ -82,7 +82,7 @@ def test_the_closure_of_a_periodic_surface_changes_nothing():
 def test_a_non_periodic_surface_closes_exactly_and_its_theta_a_moves_little():
     """The window of a surface periodic over 4 × 4 cells does not close by itself; its patch does
     (opposite edges equal) and θa (filter 92, both senses) moves from the window's open reading by
-    less than 0.6° (bench/scan_patch_bias.py on such a surface: −0.25° on average, at most 0.57°
+    less than 0.6° (studies/scan_patch_bias/scan_patch_bias.py on such a surface: −0.25° on average, at most 0.57°
     over 42 readings; docs/3d.md);
     the closure never adds slope energy (the least-squares closure takes it: Pythagoras)."""
     z = wrapped(selfaffine(320, 200, 5))

@@ -11,8 +11,8 @@ from pathlib import Path
 from interphase.analysis.criterion import CriterionModel
 from interphase.errors import InputError
 
-#: the criterion fitted on the reproduction (campaigns/precision/study_sequential.toml, the study's
-#: cases to E ± 0.1; docs/reproduction.md): `bench/refit_reproduction.py --precision --commit` writes
+#: the criterion fitted on the reproduction (studies/reproduction/study_sequential.toml, the study's
+#: cases to E ± 0.1; docs/reproduction.md): `studies/reproduction/refit_reproduction.py --precision --commit` writes
 #: it here from the committed summaries and curves
 REPRODUCTION = Path(__file__).resolve().parent / "data" / "criterion_reproduction.json"
 

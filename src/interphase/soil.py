@@ -91,7 +91,7 @@ class SoilCard:
     def lab_offset(self) -> float:
         """The model's Dr [-] that a laboratory Dr of 0 maps onto ([density] lab_offset: set with lab_span
         by a calibration on index limits so that the fitted record's Dr lands on the fitted state, or
-        fitted through several records of one stress by bench/density_scale.py): the model's Dr =
+        fitted through several records of one stress by studies/density_scale/density_scale.py): the model's Dr =
         lab_offset + lab_span · Dr. 0 when the card has none (the one-parameter scale: the model's
         loosest packing is the laboratory's e_max). Negative when the laboratory's loose end lies
         beyond what the protocol packs; a Dr mapped there is made at the loosest packing (preparation 1)
@@ -232,7 +232,7 @@ def _check_cell(card: SoilCard, bad) -> None:
     if offset is not None and not (isinstance(offset, (int, float)) and not isinstance(offset, bool)
                                    and math.isfinite(offset)):
         raise bad("density", "lab_offset", f"must be a number, got {offset!r}",
-                  "the model's Dr a laboratory Dr of 0 maps onto (bench/density_scale.py fits it), e.g. -1.2")
+                  "the model's Dr a laboratory Dr of 0 maps onto (studies/density_scale/density_scale.py fits it), e.g. -1.2")
     limits = card.extra.get("density", {}).get("dr_limits")
     if limits is not None and limits not in DR_LIMITS:
         raise bad("density", "dr_limits", f"unknown limits {limits!r}",

@@ -13,7 +13,7 @@ and writes, beside them:
   soil_test.csv   the paired soil test read on the box's plane and as the specimen's Mohr circle
 --check writes nothing and fails if a committed table differs from its re-derivation. The fits
 (criterion.json, correlations.csv, criterion_check.md and the figures) are the report's:
-`bench/refit_reproduction.py --kfs2d`.
+`studies/reproduction/refit_reproduction.py --kfs2d`.
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ and, for the comparison, studies/kfs_group1_2d/results/; writes, beside this stu
 --figure draws results/3d_vs_2d.png (E and tan δ against θa, both cards). --check writes nothing and
 fails if a committed table differs from its re-derivation. The fits (criterion.json,
 correlations.csv, criterion_check.md, Figs. 6.8, 6.10a) are the report's:
-`bench/refit_reproduction.py --kfs3d`.
+`studies/reproduction/refit_reproduction.py --kfs3d`.
 """
 
 from __future__ import annotations

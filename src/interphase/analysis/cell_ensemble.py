@@ -11,7 +11,7 @@ Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compres
     peak the mean of the seeds' own peak strains. Not the seed-mean curve's maximum, nor the
     cross-fitted peak of the interface (analysis.ensemble.peak_values): a laboratory specimen of
     millions of grains has no grain-scale fluctuation, and where model specimens' humps peak at
-    different strains both read below every specimen's own peak. Measured (bench/triaxial_peak.py,
+    different strains both read below every specimen's own peak. Measured (studies/peak_estimators/triaxial_peak.py,
     82 runs of the Karlsruhe card, a known hump plus real runs' fluctuation, 2–3 seeds): this
     estimator within ±0.06° of the specimens' mean peak, the leave-one-out −0.5 to −0.75° (rms up
     to 1.1°), the mean curve's maximum −0.04 to −0.22°.
@@ -22,7 +22,7 @@ Definitions (ε1 axial strain, εv volumetric strain, R = σ1′/σ3′, compres
     slowly than any of them, so that reading fell with the number of seeds (docs/soils/kfs_best_sample,
     every subset of n of 6 seeds: 0.6–1.1° under the seeds' own at n = 2, 1.4–1.7° at 6 in 3D; in
     quasi-2D, docs/soils/kfs_2d_seeds, 3.1° at 2 and 6.5° at 6). Against a known hump plus real
-    runs' fluctuation (bench/triaxial_peak.py, hump = a Savitzky–Golay quadratic over 2–4 % of ε1,
+    runs' fluctuation (studies/peak_estimators/triaxial_peak.py, hump = a Savitzky–Golay quadratic over 2–4 % of ε1,
     n = 2–6): the smoothed per-seed reading is within −0.3 to +0.2° in 3D (82 runs) and −1.4 to
     +0.9° in quasi-2D (114 runs), the same at every n; unsmoothed it read +0.2 to +0.7° and +0.8
     to +3.7° high (εv's fluctuation enters a slope); the mean curve's window −0.9 to +0.1° and

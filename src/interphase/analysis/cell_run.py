@@ -4,7 +4,7 @@ The strength and dilatancy come from `analysis.triaxial.shear_state`, the code t
 laboratory's records, with one step more: the stress ratio is smoothed over SMOOTH_EPS1 of ε1 (a
 centred moving average) before its peak is taken, because one run's ratio fluctuates as force chains
 rearrange and its largest fluctuation is no peak. 1 % of ε1 is the window whose per-run maximum
-reads a known hump's peak through real runs' fluctuation within ±0.06° (bench/triaxial_peak.py; 0.5 %
+reads a known hump's peak through real runs' fluctuation within ±0.06° (studies/peak_estimators/triaxial_peak.py; 0.5 %
 reads +0.03 to +0.15° high, 2 % −0.10 to −0.18° low). On the laboratory's 21 records, already smooth,
 the same smoothing lowers φ_peak by 0.005–0.17° (tests/test_cell.py). The volumetric strain is not
 smoothed: ψ's 1 % straight-line window is its smoothing, as for the laboratory. A physical case's

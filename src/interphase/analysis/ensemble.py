@@ -21,7 +21,7 @@ Definitions (shear displacement s [m], stress ratio r(s) [-] = τ/σ on the surf
     seeds, 0.300–0.344). Averaging each seed over the others' bootstrap maxima removes the hop: on
     known curves with the committed runs' own noise the spread falls by 30–55 % on plateaus and the
     coverage rises to 80–92 %, for 0.2–1.4 % more low bias on peaked curves at 3–5 seeds
-    (bench/peak_estimators.py; BENCHMARKS.md "Bagged locators"). Every per-seed t-interval here is
+    (studies/peak_estimators/peak_estimators.py; BENCHMARKS.md "Bagged locators"). Every per-seed t-interval here is
     still too narrow on real data (real sd 1.0–1.7× the claimed standard error). One seed: its own maximum (the reason says so).
   - peak_disp: where the mean curve of all the seeds peaks (a location, not the estimate).
   - critical = mean over seeds of each seed's mean r over s ≥ (1 − critical_fraction)·s_end;

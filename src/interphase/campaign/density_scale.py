@@ -7,7 +7,7 @@ records at several densities of one stress, each record's preparation is found o
 card's preparations at that stress (`anchor_preparation`), read as the model's Dr on the card's
 void-ratio map there (`model_dr`), and the line `model Dr = lab_offset + lab_span · Dr` fitted
 through them (`fit_scale`); whether the offset is needed is read from its interval
-(bench/density_scale.py bootstraps the seeds). The records of the other stresses stay held out.
+(studies/density_scale/density_scale.py bootstraps the seeds). The records of the other stresses stay held out.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 its interval needs, between `start` and `max`.
 
 The rule (a fixed-width sequential rule; its coverage is checked by resampling the study's runs in
-bench/sequential_coverage.py, docs/methods.md "Sequential seeds"):
+studies/sequential_seeds/sequential_coverage.py, docs/methods.md "Sequential seeds"):
   - every physical case (a group's runs of one physical_id, interphase.case.physical_id: the case
     without its seed; per engine) runs seeds 1..start;
   - a round ends when every run it asked for has finished; then each physical case whose seeds
@@ -38,7 +38,7 @@ from interphase.campaign.results import with_physical_ids
 
 #: rounds a case runs once its interval is within the target, which must read within too before it
 #: stops: stopping on one reading covered 92.4 % (nominal 95 %) at tan δ ± 0.02 in
-#: bench/sequential_coverage.py, two in a row 93.3 % or more in every setting checked (docs/methods.md)
+#: studies/sequential_seeds/sequential_coverage.py, two in a row 93.3 % or more in every setting checked (docs/methods.md)
 CONFIRM = 1
 
 #: a physical case's key: (engine, group, physical_id)

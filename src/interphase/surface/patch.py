@@ -43,7 +43,7 @@ directions), zero mean over the cell. `make_patch` builds it in five steps:
    periodically to the coarsest step not under it; a coarser one keeps the scan's own grid, so the
    mesh carries the heights as measured.
 
-The alternatives, measured (bench/scan_patch_bias.py, docs/3d.md):
+The alternatives, measured (studies/scan_patch_bias/scan_patch_bias.py, docs/3d.md):
 - per-line ramps (`close_ramps`): each line less a linear ramp of its own edge mismatch (centred,
   with the corner twist counted once). Every slope along a line changes by that line's mismatch
   over L. But a rough edge's mismatch varies from line to line, so the slopes across the lines change
