@@ -253,19 +253,23 @@ def test_a_line_with_an_edge_step_closes_at_its_mean_height():
 
 
 def test_selfaffine_kind():
-    spec = ProfileSpec.make("selfaffine", hurst=0.8, rms_slope=0.5, long_cutoff=10, short_cutoff=0.2, length=30,
+    spec = ProfileSpec.make("selfaffine", hurst=0.8, rms_slope=0.5, long_cutoff=10, short_cutoff=0.8, length=30,
                             seed=4)
     p = from_spec(spec, D50, 50 * D50)
     assert p.periodic and p.length == pytest.approx(60 * D50)               # two periods tiled
-    q = selfaffine_profile(0.8, 0.5, 10, 0.2, 30, 4, d50=D50)
+    q = selfaffine_profile(0.8, 0.5, 10, 0.8, 30, 4, d50=D50)
     np.testing.assert_array_equal(p.z[: q.z.size], q.z)                    # a pure function of the seed
     slope = np.diff(q.z) / np.diff(q.x)
     assert math.sqrt(np.mean(slope ** 2)) == pytest.approx(0.5, rel=0.25)
-    other = selfaffine_profile(0.8, 0.5, 10, 0.2, 30, 5, d50=D50)
+    other = selfaffine_profile(0.8, 0.5, 10, 0.8, 30, 5, d50=D50)
     assert not np.allclose(other.z, q.z)
     assert Case(profile=spec, device="periodic", **SMALL).surface().periodic
     with pytest.raises(InputError):
-        ProfileSpec.make("selfaffine", hurst=1.2, rms_slope=0.5, long_cutoff=10, short_cutoff=0.2, length=30, seed=1)
+        ProfileSpec.make("selfaffine", hurst=1.2, rms_slope=0.5, long_cutoff=10, short_cutoff=0.8, length=30, seed=1)
+    # a grid finer than the grains' contact scale (short_cutoff/8 < 0.1 D50) is refused, naming the fix
+    with pytest.raises(InputError, match="finer than the 0.1 D50") as e:
+        ProfileSpec.make("selfaffine", hurst=0.8, rms_slope=0.5, long_cutoff=10, short_cutoff=0.2, length=30, seed=4)
+    assert "short_cutoff ≥ 0.8" in e.value.fix and e.value.where.endswith("short_cutoff")
 
 
 @pytest.mark.liggghts

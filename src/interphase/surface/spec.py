@@ -97,7 +97,17 @@ class ProfileSpec:
                 raise InputError("need rms_slope > 0 and short_cutoff > 0 (D50 units)", where=self.where)
             if not names["short_cutoff"] < names["long_cutoff"] <= names["length"]:
                 raise InputError("need short_cutoff < long_cutoff ≤ length (D50 units)", where=self.where,
-                                 fix="e.g. short_cutoff = 0.1, long_cutoff = 10, length = 60")
+                                 fix="e.g. short_cutoff = 0.8, long_cutoff = 10, length = 60")
+            from interphase.surface.builder import CONTACT_STEP_D50
+
+            if names["short_cutoff"] / 8 < CONTACT_STEP_D50 - 1e-12:
+                # the line is synthesised on a grid of short_cutoff/8 and meshed as it is: finer facets
+                # than the grains' contact scale read a flat 0.020 too strong in tan δ (builder)
+                raise InputError(f"short_cutoff {names['short_cutoff']:g} D50 puts the line's grid at "
+                                 f"{names['short_cutoff'] / 8:g} D50, finer than the {CONTACT_STEP_D50:g} D50 facets "
+                                 "below which LIGGGHTS resolves one grain contact as several",
+                                 where=f"{self.where}.short_cutoff",
+                                 fix=f"short_cutoff ≥ {8 * CONTACT_STEP_D50:g} (D50 units)")
             if names["length"] / names["short_cutoff"] > 1e5:
                 raise InputError("length/short_cutoff above 1e5 grid points", where=self.where)
             if int(names["seed"]) != names["seed"] or names["seed"] < 0:
