@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from interphase.analysis.difference import difference
-from interphase.campaign.crosscheck import (DEFAULT_TOLERANCES, ENGINES, CrosscheckReport, compare, crosscheck,
+from interphase.campaign.crosscheck import (DEFAULT_TOLERANCES, ENGINES, CrosscheckReport, crosscheck, engine_table,
                                           physical_case, split_crosscheck)
 from interphase.errors import InputError
 
@@ -84,7 +84,7 @@ def test_judged_in_limits_a_tolerance_to_groups_and_reports_it_elsewhere():
                           for e in ENGINES}
          for name, v in (("slide", 0.2), ("roll", 0.3)) for k in (1, 2, 3)}
     groups = {lab: "sliding" if lab.startswith("slide") else "rolling" for lab in s}
-    t = compare(s, {}, tol, groups).set_index(["level", "physical", "metric"]).loc["ensemble"]
+    t = engine_table(s, {}, tol, groups).set_index(["level", "physical", "metric"]).loc["ensemble"]
     assert t.loc[("slide", "residual_stress_ratio"), "verdict"] == "agree"
     roll = t.loc[("roll", "residual_stress_ratio")]
     assert pd.isna(roll.verdict) and roll["diff"] == pytest.approx(0.001)  # reported, with its interval
@@ -124,7 +124,7 @@ def _runs(lig, yad, key="peak_stress_ratio", name="c"):
 
 
 def _row(summaries, metric="peak_stress_ratio", tol=TOL):
-    t = compare(summaries, {}, tol)
+    t = engine_table(summaries, {}, tol)
     e = t[(t.level == "ensemble") & (t.metric == metric)]
     assert len(e) == 1
     return e.iloc[0]
@@ -184,7 +184,7 @@ def test_one_seed_is_undecided_and_never_a_verdict_on_its_own():
     s = _runs([0.30], [0.30])
     r = _row(s)
     assert r.seeds == 1 and r.verdict == "undecided" and pd.isna(r.seeds_needed)
-    t = compare(s, {}, TOL)
+    t = engine_table(s, {}, TOL)
     seed = t[(t.level == "seed") & (t.metric == "peak_stress_ratio")].iloc[0]
     assert seed["diff"] == 0 and pd.isna(seed.verdict) and seed.case == "c-s1" and seed.physical == "c"
 
@@ -201,7 +201,7 @@ def test_reported_metrics_and_undefined_ones_carry_no_verdict():
     r = _row(s, "shear_disp_at_peak")
     assert pd.isna(r.verdict) and math.isfinite(r.diff_lo) and r.seeds == 3
     box = {f"box (b-s{k})": {e: {"peak_stress_ratio": 0.5 + 0.01 * k} for e in ENGINES} for k in (1, 2)}
-    t = compare(box, {}, TOL)
+    t = engine_table(box, {}, TOL)
     judged = t[(t.level == "ensemble") & t.verdict.notna()]
     assert list(judged.metric) == ["peak_stress_ratio"] and judged.iloc[0].physical == "box (b)"
 
@@ -215,14 +215,14 @@ def test_default_tolerances_judge_time_averages_and_report_the_peak():
                      "yade": {"peak_stress_ratio": p + 0.1, "residual_stress_ratio": 0.305 + 0.01 * k,
                               "overlap_mean_d50": 0.0151 + 0.0002 * k, "theta_r_surface_deg": 30.0}}
          for k, p in ((1, 0.40), (2, 0.45), (3, 0.50))}
-    t = compare(s, {}, DEFAULT_TOLERANCES).set_index(["level", "metric"]).loc["ensemble"]
+    t = engine_table(s, {}, DEFAULT_TOLERANCES).set_index(["level", "metric"]).loc["ensemble"]
     assert pd.isna(t.loc["peak_stress_ratio", "verdict"]) and t.loc["peak_stress_ratio", "diff"] == pytest.approx(0.1)
     assert pd.isna(t.loc["theta_r_surface_deg", "verdict"])
     r = t.loc["residual_stress_ratio"]
     assert r.tolerance == 0.03 and r.tolerance_rule == "absolute" and r.verdict == "agree"
     o = t.loc["overlap_mean_d50"]
     assert o.tolerance == pytest.approx(0.10 * 0.5 * (0.0154 + 0.0155)) and o.verdict == "agree"
-    md = CrosscheckReport("x", Path("/tmp/x"), DEFAULT_TOLERANCES, compare(s, {}, DEFAULT_TOLERANCES)).markdown()
+    md = CrosscheckReport("x", Path("/tmp/x"), DEFAULT_TOLERANCES, engine_table(s, {}, DEFAULT_TOLERANCES)).markdown()
     assert "| c | peak_stress_ratio | 3 |" in md and "| reported |" in md
 
 
@@ -234,7 +234,7 @@ def test_a_theta_only_one_engine_gives_is_undecided():
 
 
 def _report(summaries, missing=()):
-    return CrosscheckReport("x", Path("/tmp/x"), TOL, compare(summaries, {}, TOL), list(missing))
+    return CrosscheckReport("x", Path("/tmp/x"), TOL, engine_table(summaries, {}, TOL), list(missing))
 
 
 def test_exit_state_passes_only_when_every_judged_row_agrees():

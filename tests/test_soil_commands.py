@@ -50,7 +50,7 @@ def no_engine(monkeypatch):
         r = _element()
         return r, [{"quantity": c["quantity"], "target": c["laboratory"], "value": c["measured"], "lo": c["lo"],
                     "hi": c["hi"], "difference": c["difference"], "verdict": c["verdict"]}
-                   for c in cal.compare(target.values, r)], [], 2
+                   for c in cal.check_angles(target.values, r)], [], 2
 
     monkeypatch.setattr(cal, "_final_checks", final)
     return calls
@@ -242,10 +242,10 @@ def test_an_implausible_target_exits_2_before_anything_runs(tmp_path, capsys, no
 
 def test_a_verdict_says_within_only_with_an_interval_inside_the_tolerance():
     """A --quick card called a 37°-wide interval "within"."""
-    from interphase.campaign.calibrate import compare
+    from interphase.campaign.calibrate import check_angles
 
     lab = {"phi_peak_deg": 38.0}
-    verdict = lambda r: compare(lab, r)[0]["verdict"]
+    verdict = lambda r: check_angles(lab, r)[0]["verdict"]
     assert verdict(_element(phi_peak=38.5, width=0.8)) == "within"
     assert verdict(_element(phi_peak=38.5, width=18.5)) == "undecided"         # the point within, the interval not
     one_seed = _element(phi_peak=38.0)

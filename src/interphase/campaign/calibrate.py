@@ -240,10 +240,10 @@ def _final_checks(card: SoilCard, target, n_seeds: int, runs: Path, executor, jo
                                    rerun_failed=rerun_failed)
     achieved = [{"quantity": c["quantity"], "target": c["laboratory"], "value": c["measured"], "lo": c["lo"],
                  "hi": c["hi"], "difference": c["difference"], "verdict": c["verdict"]}
-                for c in compare(target.values, final)]
+                for c in check_angles(target.values, final)]
     verification = [{**v, "measured": {k: val for k, val in r.to_dict().items()
                                        if k.startswith(("phi_", "psi_", "solid_")) or k in ("n_seeds", "has_peak")},
-                     "checks": compare(v, r)} for v, r in zip(target.verification, held_out)]
+                     "checks": check_angles(v, r)} for v, r in zip(target.verification, held_out)]
     return final, achieved, verification, len(seeds) * (1 + len(target.verification))
 
 
@@ -423,7 +423,7 @@ def _sample(plan: Plan, executor, jobs, stream, rerun_failed: bool):
     return calib, history, n_runs
 
 
-def compare(lab: dict, measured) -> list[dict]:
+def check_angles(lab: dict, measured) -> list[dict]:
     """Each laboratory angle of `lab` against the element test `measured` (an ElementResult):
     difference [°] (measured − laboratory), and the verdict against TOLERANCES: "within" when the
     whole 95 % interval lies within the tolerance of the laboratory value (so it is narrower than

@@ -47,7 +47,7 @@ import tomli_w
 from interphase.analysis.cell_ensemble import at_critical_state
 from interphase.campaign import store as st
 from interphase.campaign.calibrate import TOLERANCES as ANGLE_TOLERANCES
-from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, compare, grainlearning, sample_rows
+from interphase.campaign.calibrate import _clean, _iterate, _posterior, _quiet, check_angles, grainlearning, sample_rows
 from interphase.campaign.element import CELL_SERIES, run_cases, write_campaign
 from interphase.campaign.restore import restoring
 from interphase.errors import InputError
@@ -232,10 +232,10 @@ def _sample(target: CellTarget, budget: dict, runs: Path, tag: str, e_min: float
 
 
 def _checks(lab: dict, r, dr_lab: float) -> list[dict]:
-    """calibrate.compare's verdicts on the angles, and the specimens' relative density beside them.
+    """calibrate.check_angles' verdicts on the angles, and the specimens' relative density beside them.
     φ_cs is judged only where the model has reached a critical state (|−dεv/dε1| at the end within
     cell_ensemble.CRITICAL_RATE); else its verdict says so and the note says how to get there."""
-    checks = compare(lab, r)
+    checks = check_angles(lab, r)
     for c in checks:
         if c["quantity"] == "phi_cs_deg" and not at_critical_state(r.dilatancy_end):
             c["verdict"] = NOT_CRITICAL

@@ -385,7 +385,7 @@ def _ensemble(lig: list[float], yad: list[float], kind: str | None, tol: float |
     return out
 
 
-def compare(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict,
+def engine_table(summaries: dict[str, dict[str, dict]], roles: dict[str, str], tolerances: dict,
             groups: dict[str, str] | None = None) -> pd.DataFrame:
     """summaries[label][engine] = summary row → the report table: the ensemble rows (verdicts) of
     `judge`, then the per-seed rows of `seed_rows`."""
@@ -434,7 +434,7 @@ def crosscheck(path, *, jobs: int | None = None, output=None, rerun_failed: bool
             missing.append((label, p.engine, st.folder_status(folder) if folder.exists() else "not run"))
             continue
         summaries.setdefault(label, {})[p.engine] = data.get("row", data)
-    table = compare(summaries, roles, tol, groups)
+    table = engine_table(summaries, roles, tol, groups)
     report = CrosscheckReport(campaign.name, campaign.output, tol, table, missing)
     campaign.output.mkdir(parents=True, exist_ok=True)
     table.to_csv(campaign.output / "crosscheck.csv", index=False)

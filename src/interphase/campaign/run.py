@@ -269,9 +269,9 @@ def run_campaign(path, *, engines=None, executor: str | None = None, jobs: int |
         while True:
             now = planned
             if campaign.seeds is not None:
-                from interphase.campaign.sequential import select
+                from interphase.campaign.sequential import this_round
 
-                now, state = select(campaign, planned, store)
+                now, state = this_round(campaign, planned, store)
                 rounds += 1
                 _say_round(campaign, state, rounds, stream)
             report.planned = len(now)
@@ -394,7 +394,7 @@ def _execute(campaign: Campaign, todo: list[PlannedCase], store: st.CampaignStor
 
 
 def _next_round(campaign: Campaign, planned: list[PlannedCase], stream) -> list[PlannedCase]:
-    """The runs sequential seeds ask for now (campaign.sequential.select), read without the lock."""
+    """The runs sequential seeds ask for now (campaign.sequential.this_round), read without the lock."""
     from interphase.campaign.sequential import rounds_of, wanted_ids
 
     if campaign.output.is_dir():

@@ -198,7 +198,7 @@ def rounds_of(campaign, planned, store) -> dict[Key, CaseRound]:
     return {key: dataclasses.replace(r, case=names.get(key, "")) for key, r in rounds.items()}
 
 
-def select(campaign, planned, store) -> tuple[list, dict[Key, CaseRound]]:
+def this_round(campaign, planned, store) -> tuple[list, dict[Key, CaseRound]]:
     """(the planned runs the rounds ask for now, in plan order; the rounds)."""
     rounds = rounds_of(campaign, planned, store)
     want = wanted_ids(campaign.seeds, planned, rounds)
