@@ -9,7 +9,7 @@ Each case runs once per seed with LIGGGHTS (campaign.runner.run_case; a finished
 not rerun). Prints per step: tan δ at the peak (seed mean and range), θr, the share of surface
 contacts whose normal tilts more than 1° (no facet of the line tilts 2°) and the normal forces'
 part of ΣFx/ΣFz. What it showed (2026-11-29, 3 seeds): at 0.026 D50 tan δ 0.070, 31 % of the
-contacts tilted 1–20°; at 0.1 D50 0.055, 5 %; the flat 0.050 (surface.builder.CONTACT_STEP_D50).
+contacts tilted 1–20°; at 0.1 D50 0.055, 5 %; the flat 0.050 (surface.base.CONTACT_STEP_D50).
 About 2 min a run on one core of the project's 2-core machine.
 """
 

@@ -13,6 +13,16 @@ import numpy as np
 
 from interphase.errors import InputError
 
+#: The finest mesh step [D50]: a measured line that cannot be meshed as measured is resampled to it,
+#: and a self-affine line's grid may not be finer (surface.spec): the grains'
+#: contact scale. At 100 kPa their Hertz contacts are 0.08–0.17 D50 across (mean overlaps 0.3–1.5 %
+#: of D50 at G 500–50 MPa); on facets much shorter than that LIGGGHTS resolves one grain's contact
+#: as several facet and edge contacts whose normals tilt away from every facet's. Measured on the
+#: Karlsruhe card's Dektak line at μs 0.05 (docs/methods.md, studies/kfs_group1_2d/mesh_step_check.py, 3 seeds):
+#: facets of 0.026 D50 read tan δ 0.070 with 31 % of the surface contacts tilted 1–20° on a mesh
+#: whose facets tilt < 2°; facets of 0.1 D50 read 0.055 with 5 %; the flat 0.050.
+CONTACT_STEP_D50 = 0.1
+
 AXES = ("x", "y")
 #: the sense of shear along a line: "+" as measured, "-" mirrored
 DIRECTIONS = ("+", "-")

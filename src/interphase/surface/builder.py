@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from interphase.errors import InputError
-from interphase.surface.base import Profile
+from interphase.surface.base import CONTACT_STEP_D50, Profile
 from interphase.surface.filters import gaussian_filter, prepare_measured
 from interphase.surface.lines import line_profile, parse_line, scan_profile
 from interphase.surface.mesh import min_angle_deg
@@ -40,14 +40,6 @@ MIN_FACE_D50 = 0.02
 LIGGGHTS_MIN_ANGLE_DEG = 0.256
 
 
-#: The step a measured line that cannot be meshed as measured is resampled to [D50]: the grains'
-#: contact scale. At 100 kPa their Hertz contacts are 0.08–0.17 D50 across (mean overlaps 0.3–1.5 %
-#: of D50 at G 500–50 MPa); on facets much shorter than that LIGGGHTS resolves one grain's contact
-#: as several facet and edge contacts whose normals tilt away from every facet's. Measured on the
-#: Karlsruhe card's Dektak line at μs 0.05 (docs/methods.md, studies/kfs_group1_2d/mesh_step_check.py, 3 seeds):
-#: facets of 0.026 D50 read tan δ 0.070 with 31 % of the surface contacts tilted 1–20° on a mesh
-#: whose facets tilt < 2°; facets of 0.1 D50 read 0.055 with 5 %; the flat 0.050.
-CONTACT_STEP_D50 = 0.1
 
 
 def mesh_step(d50: float, wall_width: float | None = None) -> float:

@@ -39,7 +39,7 @@ directions), zero mean over the cell. `make_patch` builds it in five steps:
    goes entirely; each wavelength of the remaining edge mismatch is spread over about its own
    wavelength from the seam. In the least-squares sense, no closure changes the slopes less.
 5. Resolution (`coarsened`). A patch whose step is finer than `min_step` (the builder's: the
-   grains' contact scale, surface.builder.CONTACT_STEP_D50·D50) is resampled linearly and
+   grains' contact scale, surface.base.CONTACT_STEP_D50·D50) is resampled linearly and
    periodically to the coarsest step not under it; a coarser one keeps the scan's own grid, so the
    mesh carries the heights as measured.
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import PurePath
 
 from interphase.errors import InputError
-from interphase.surface.base import AREAL_DIRECTIONS, AREAL_PATCH_RULE, DIRECTIONS, check_axis
+from interphase.surface.base import AREAL_DIRECTIONS, AREAL_PATCH_RULE, CONTACT_STEP_D50, DIRECTIONS, check_axis
 from interphase.surface.units import units_factor
 
 KIND_PARAMS = {
@@ -98,11 +98,9 @@ class ProfileSpec:
             if not names["short_cutoff"] < names["long_cutoff"] <= names["length"]:
                 raise InputError("need short_cutoff < long_cutoff ≤ length (D50 units)", where=self.where,
                                  fix="e.g. short_cutoff = 0.8, long_cutoff = 10, length = 60")
-            from interphase.surface.builder import CONTACT_STEP_D50
-
             if names["short_cutoff"] / 8 < CONTACT_STEP_D50 - 1e-12:
                 # the line is synthesised on a grid of short_cutoff/8 and meshed as it is: finer facets
-                # than the grains' contact scale read a flat 0.020 too strong in tan δ (builder)
+                # than the grains' contact scale read a flat 0.020 too strong in tan δ (base.CONTACT_STEP_D50)
                 raise InputError(f"short_cutoff {names['short_cutoff']:g} D50 puts the line's grid at "
                                  f"{names['short_cutoff'] / 8:g} D50, finer than the {CONTACT_STEP_D50:g} D50 facets "
                                  "below which LIGGGHTS resolves one grain contact as several",
