@@ -545,7 +545,7 @@ def _add_measured(measured: list, p: PlannedCase, folder: Path) -> None:
     """Add a finished run to `measured` (count, engine seconds, their estimate): its engine time, or
     for a restored run (no timings) the elapsed time its row brought."""
     meta = st.read_json(folder / st.CASE_JSON) or {}
-    took = meta.get("timings", {}).get("execute") or meta.get("elapsed")
+    took = (meta.get("timings") or {}).get("execute") or meta.get("elapsed")
     if isinstance(took, (int, float)) and math.isfinite(took) and took > 0:
         measured[0] += 1
         measured[1] += took
