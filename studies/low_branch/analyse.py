@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from interphase.analysis.criterion import predict, rule_delta
+from interphase.analysis.ensemble import values_interval
 from interphase.analysis.ensemble_table import ensemble_table
 from interphase.campaign.results import read_committed, settle_tables
 from interphase.criterion_fits import load_criterion
@@ -154,15 +155,11 @@ def verdict(c: pd.DataFrame) -> pd.DataFrame:
 
 
 def _mean_ci(v) -> tuple[float, float, float]:
-    """Mean of case values and its 95 % t interval over the cases (NaN below 3)."""
-    from scipy import stats
-
+    """Mean of case values and its 95 % t interval over the cases (analysis.ensemble.values_interval:
+    NaN below 3)."""
     v = np.asarray(v, float)
     v = v[np.isfinite(v)]
-    if v.size < 3:
-        return (float(v.mean()) if v.size else math.nan), math.nan, math.nan
-    h = stats.t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size)
-    return float(v.mean()), float(v.mean() - h), float(v.mean() + h)
+    return (float(v.mean()) if v.size else math.nan), *values_interval(v)
 
 
 def tables(folder: Path = RESULTS) -> dict[Path, pd.DataFrame]:
